@@ -1,0 +1,7 @@
+"""IR → program text, one module per controller (``get_dialect(name)``)."""
+
+from probegen.dialects.base import REGISTRY, Dialect, get_dialect
+from probegen.dialects.dmis import Dmis
+from probegen.dialects.fanuc import Fanuc
+
+__all__ = ["REGISTRY", "Dialect", "Dmis", "Fanuc", "get_dialect"]

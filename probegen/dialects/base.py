@@ -1,0 +1,122 @@
+"""The ``Dialect`` base: registry, capabilities, number formatting, templates.
+
+A dialect is data first (the sqlglot pattern): class constants say what it is and what
+it can express; templates under ``templates/<name>/`` hold one macro per IR node; the
+Python side lowers IR nodes into the plain values those macros print.  Anything a
+dialect cannot express raises ``UnsupportedError`` naming the node and the dialect: a
+dropped probing move is a crash on a real machine.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, ClassVar
+
+import jinja2
+
+from probegen import ir
+from probegen.constants import MM_PER_INCH
+from probegen.errors import UnsupportedError, did_you_mean
+from probegen.resources import template_text
+
+REGISTRY: dict[str, type[Dialect]] = {}
+
+
+def get_dialect(name: str) -> Dialect:
+    """Return an instance of the dialect called ``name``.
+
+    Raises:
+        UnsupportedError: unknown name, with a "did you mean".
+    """
+    if name not in REGISTRY:
+        raise UnsupportedError(f"unknown dialect {name!r}{did_you_mean(name, REGISTRY)}; "
+                               f"expected one of {', '.join(sorted(REGISTRY))}")
+    return REGISTRY[name]()
+
+
+class Dialect:
+    """Base of every controller dialect."""
+
+    NAME: ClassVar[str] = ""
+    """Registry name, also the folder under ``templates/``."""
+    EXTENSION: ClassVar[str] = ".txt"
+    """File extension of emitted programs."""
+    DECIMALS: ClassVar[dict[str, int]] = {"mm": 4, "inch": 5}
+    """Decimals printed for lengths, by program units."""
+    LINE_LENGTH: ClassVar[int] = 80
+    """Longest line the target accepts."""
+    RUNTIME_VARIABLES: ClassVar[bool] = False
+    """Whether the controller computes with variables at run time (``ir.Var``, ``Assign``)."""
+    LOCAL_FRAMES: ClassVar[bool] = False
+    """Whether the language can translate its frame onto a measured feature."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.NAME:
+            REGISTRY[cls.NAME] = cls
+
+    def __init__(self) -> None:
+        self.units = "mm"
+
+    # -- numbers ------------------------------------------------------------------
+    def scale(self, mm: float) -> float:
+        """A length in mm in the program's units."""
+        return mm / MM_PER_INCH if self.units == "inch" else mm
+
+    def num(self, value: float, decimals: int | None = None) -> str:
+        """Fixed decimals, no exponent, never ``-0``."""
+        d = self.DECIMALS[self.units] if decimals is None else decimals
+        text = f"{value:.{d}f}"
+        if text.lstrip("-").strip("0.") == "":
+            text = text.lstrip("-")
+        return text
+
+    def length(self, mm: float) -> str:
+        """A length given in mm, printed in program units."""
+        return self.num(self.scale(mm))
+
+    # -- errors ---------------------------------------------------------------------
+    def unsupported(self, node: object, why: str) -> UnsupportedError:
+        """The error for an IR node this dialect cannot express."""
+        return UnsupportedError(f"dialect {self.NAME!r} cannot express {type(node).__name__}"
+                                f" ({why}): {node!r}")
+
+    # -- templates ------------------------------------------------------------------
+    @functools.cached_property
+    def env(self) -> jinja2.Environment:
+        """The Jinja environment with this dialect's filters, strict about undefined names."""
+        env = jinja2.Environment(
+            loader=jinja2.FunctionLoader(lambda name: template_text(self.NAME, name)),
+            undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+            trim_blocks=True, lstrip_blocks=True, autoescape=False,
+        )
+        env.filters["num"] = self.num
+        env.filters["len"] = self.length
+        return env
+
+    def render(self, template: str, **context: Any) -> str:
+        """Render ``templates/<NAME>/<template>`` with ``context``."""
+        return self.env.get_template(template).render(**context)
+
+    # -- the entry point -------------------------------------------------------------------
+    def generate(self, program: ir.Program) -> str:
+        """The program text; lines end with ``\\n``; byte-for-byte repeatable."""
+        self.units = program.setup.units
+        text = self.render("program.j2", **self.lower(program))
+        self.check_lines(text)
+        return text
+
+    def lower(self, program: ir.Program) -> dict[str, Any]:
+        """The template context for ``program``; each dialect defines it."""
+        raise NotImplementedError
+
+    def check_lines(self, text: str) -> None:
+        """Refuse output the controller would not accept (line length, characters)."""
+        for number, line in enumerate(text.split("\n"), start=1):
+            if len(line) > self.LINE_LENGTH:
+                raise UnsupportedError(f"dialect {self.NAME!r}: line {number} is {len(line)} "
+                                       f"characters, expected at most {self.LINE_LENGTH}: "
+                                       f"{line!r}")
+            if not line.isascii():
+                raise UnsupportedError(f"dialect {self.NAME!r}: line {number} has non-ASCII "
+                                       f"text: {line!r}")

@@ -1,0 +1,101 @@
+"""DMIS 5 (Dimensional Measuring Interface Standard) for CMMs.
+
+Conventions (see ``docs/dialects.md``):
+
+* ``GOTO`` positions the sensor's tip centre; every planned positioning move becomes one.
+* A touch becomes ``PTMEAS/CART,x,y,z,i,j,k`` with the nominal contact point and the
+  outward surface normal; the CMM approaches and retracts along the normal by the
+  ``SNSET/APPRCH`` and ``SNSET/RETRCT`` distances, which are set before each measurement
+  to the planned approach distance, so the planned retract moves are implicit.
+* ``SNSET/SEARCH`` is the planned overtravel.
+* A ``LocalFrame`` becomes ``D(name)=TRANS/XORIG,FA(f),YORIG,FA(f),ZORIG,FA(f)``; the frame in
+  force at the start is saved as ``D(PCS)`` and recalled by ``RestoreFrame``.
+* DMIS has no run-time arithmetic: ``ir.Var``, ``Assign`` and ``ReportCentre`` are
+  unsupported.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from probegen import ir
+from probegen.dialects.base import Dialect
+
+
+class Dmis(Dialect):
+    """DMIS 5.x part program."""
+
+    NAME: ClassVar[str] = "dmis"
+    EXTENSION: ClassVar[str] = ".dmi"
+    LINE_LENGTH: ClassVar[int] = 256
+    LOCAL_FRAMES: ClassVar[bool] = True
+    UNITS_WORD: ClassVar[dict[str, str]] = {"mm": "MM", "inch": "INCH"}
+    """The DMIS length unit word for each unit system."""
+    FEED_UNIT: ClassVar[dict[str, tuple[str, float]]] = {"mm": ("MPM", 1e-3),
+                                                         "inch": ("IPM", 1.0)}
+    """Feed unit word and factor from program units per minute."""
+
+    def point(self, p: ir.Point, node: object) -> list[str]:
+        """A point as three numbers; run-time values are not expressible."""
+        out = []
+        for c in p:
+            if isinstance(c, ir.Var):
+                raise self.unsupported(node, "DMIS has no run-time variables")
+            out.append(self.length(c))
+        return out
+
+    def feed(self, mm_per_min: float) -> str:
+        word, k = self.FEED_UNIT[self.units]
+        return f"{word},{self.num(self.scale(mm_per_min) * k, 3)}"
+
+    def lower(self, program: ir.Program) -> dict[str, Any]:
+        s = program.setup
+        body = [self.block(node) for node in program.body]
+        frames = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))
+        return {"s": s, "units": self.UNITS_WORD[s.units], "body": body, "frames": frames,
+                "length": self.length(s.probe_length), "ball": self.length(s.ball_diameter),
+                "posvel": self.feed(s.position_feed), "mesvel": self.feed(s.probe_feed)}
+
+    def block(self, node: ir.Node) -> dict[str, Any]:
+        """One top-level IR node as the values its template macro prints."""
+        if isinstance(node, ir.Comment):
+            return {"kind": "comment", "text": node.text}
+        if isinstance(node, ir.Move):
+            return self.move(node)
+        if isinstance(node, ir.FeatureBlock):
+            return self.feature(node)
+        if isinstance(node, ir.LocalFrame):
+            return {"kind": "frame", "name": node.name, "feature": node.feature}
+        if isinstance(node, ir.RestoreFrame):
+            return {"kind": "restore"}
+        raise self.unsupported(node, "DMIS has no run-time arithmetic")
+
+    def move(self, node: ir.Move) -> dict[str, Any]:
+        return {"kind": "goto", "xyz": self.point(node.target, node)}
+
+    def feature(self, node: ir.FeatureBlock) -> dict[str, Any]:
+        f = node.feature
+        steps: list[dict[str, Any]] = []
+        touches = [n for n in node.body if isinstance(n, ir.Touch)]
+        approaches = {n.approach for n in touches}
+        overtravels = {n.overtravel for n in touches}
+        if len(approaches) > 1 or len(overtravels) > 1:
+            raise self.unsupported(node, "one approach and search distance per measurement")
+        for n in node.body:
+            if isinstance(n, ir.Touch):
+                steps.append({"kind": "ptmeas", "xyz": self.point(n.contact, n),
+                              "ijk": [self.num(v, 6) for v in n.normal]})
+            elif isinstance(n, ir.Move) and n.mode is not ir.MoveMode.RETRACT:
+                steps.append(self.move(n))
+            elif isinstance(n, ir.Comment):
+                steps.append({"kind": "comment", "text": n.text})
+            elif not isinstance(n, ir.Move):
+                raise self.unsupported(n, "not inside a DMIS measurement")
+        return {
+            "kind": "feature", "id": f.id, "n": len(touches),
+            "side": "INNER" if f.inner else "OUTER",
+            "centre": self.point(f.centre, node), "diameter": self.length(f.diameter),
+            "approach": self.length(approaches.pop()) if approaches else None,
+            "search": self.length(overtravels.pop()) if overtravels else None,
+            "steps": steps,
+        }

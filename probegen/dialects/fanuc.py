@@ -1,0 +1,164 @@
+"""Fanuc Macro B (0i/30i series, custom macro B).
+
+Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals):
+
+* Header sets units (G20/G21), absolute mode (G90), the profile's reset codes (plane,
+  compensation and canned cycles off, feed per minute, rotation off), the work offset,
+  the probe tool and its length offset: the program relies on no state it did not set.
+* ``RAPID`` moves are G0, used only at the clearance plane or straight up to it.
+* ``PROTECTED`` moves are G31 at the positioning feed; if the skip signal fires the skip
+  position differs from the end point, and the program prints ``ERR COLLISION`` and stops
+  with macro alarm 3002.
+* Touches are G31 at the probing feed from the approach point to ``overtravel`` past the
+  nominal contact; if the skip position equals the end point the probe never triggered,
+  and the program prints ``ERR NOTOUCH`` and stops with macro alarm 3001.
+* ``RETRACT`` moves are G1 back along the approach line (the stylus may still be
+  deflected at their start, so they are not skip moves).
+* Skip positions ``#5061-#5063`` are printed with DPRNT in the line format of
+  ``docs/dprnt-format.md`` inside POPEN/PCLOS.
+* Run-time values live in common variables from the profile's ``variable_base``
+  (``#100`` by default): named values from base+0, scratch at base+90..base+93.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from probegen import ir
+from probegen.constants import tol
+from probegen.dialects.base import Dialect
+
+SCRATCH = 90
+"""Offset of the scratch variables (three targets and one check sum) from the base."""
+
+
+class Fanuc(Dialect):
+    """Fanuc Macro B G-code."""
+
+    NAME: ClassVar[str] = "fanuc"
+    EXTENSION: ClassVar[str] = ".nc"
+    LINE_LENGTH: ClassVar[int] = 80
+    RUNTIME_VARIABLES: ClassVar[bool] = True
+    UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
+    """The G code for each unit system."""
+    DPRNT_FORMAT: ClassVar[dict[str, str]] = {"mm": "44", "inch": "35"}
+    """Integer and fraction digits of printed positions (``#5061[44]``)."""
+    CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
+    """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
+    skip did not fire: the end point itself is rounded to the least input increment."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.vars: dict[str, int] = {}
+        self.base = 100
+        self.label = 1000
+
+    # -- values -----------------------------------------------------------------
+    def var(self, name: str) -> str:
+        """The ``#n`` holding run-time value ``name`` (allocated on first use)."""
+        if name not in self.vars:
+            if len(self.vars) >= SCRATCH:
+                raise self.unsupported(ir.Var(name), f"more than {SCRATCH} run-time values")
+            self.vars[name] = self.base + len(self.vars)
+        return f"#{self.vars[name]}"
+
+    def expr(self, c: ir.Coord) -> str:
+        """A coordinate as a Macro B expression (no outer brackets)."""
+        if not isinstance(c, ir.Var):
+            return self.length(c)
+        if abs(c.offset) < tol.zero:
+            return self.var(c.name)
+        sign = "-" if c.offset < 0 else "+"
+        return f"{self.var(c.name)}{sign}{self.length(abs(c.offset))}"
+
+    def addr(self, c: ir.Coord) -> str:
+        """A coordinate as an address value: a number, ``#n`` or ``[expression]``."""
+        e = self.expr(c)
+        return e if not isinstance(c, ir.Var) or "+" not in e and "-" not in e else f"[{e}]"
+
+    def scratch(self, k: int) -> str:
+        """Scratch variable ``k`` (0-2 targets, 3 the check sum)."""
+        return f"#{self.base + SCRATCH + k}"
+
+    def next_label(self) -> int:
+        """A fresh block number for a forward GOTO."""
+        self.label += 1
+        return self.label
+
+    def feed(self, mm_per_min: float) -> str:
+        """A feed in program units per minute, with the decimal point Fanuc wants."""
+        return self.num(self.scale(mm_per_min), 0) + "."
+
+    # -- lowering -----------------------------------------------------------------
+    def lower(self, program: ir.Program) -> dict[str, Any]:
+        s = program.setup
+        self.base = s.variable_base
+        self.setup = s
+        blocks = [self.block(node) for node in ir.walk(program.body)]
+        return {
+            "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
+            "ball": self.length(s.ball_diameter),
+            "clearance": self.length(s.clearance_z),
+            "first_var": self.base, "last_var": self.base + SCRATCH + 3,
+        }
+
+    def block(self, node: ir.Node) -> dict[str, Any]:
+        """One IR node as the values its template macro prints."""
+        if isinstance(node, ir.Comment):
+            return {"kind": "comment", "text": node.text.upper()}
+        if isinstance(node, ir.FeatureBlock):
+            f = node.feature
+            return {"kind": "comment",
+                    "text": f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}"}
+        if isinstance(node, ir.Move):
+            return self.move(node)
+        if isinstance(node, ir.Touch):
+            return self.touch(node)
+        if isinstance(node, ir.Assign):
+            return self.assign(node)
+        if isinstance(node, ir.ReportCentre):
+            return self.centre(node)
+        raise self.unsupported(node, "no run-time frames; use run-time variables instead")
+
+    def centre(self, node: ir.ReportCentre) -> dict[str, Any]:
+        xyz = []
+        for c in node.centre:
+            if not isinstance(c, ir.Var) or c.offset:
+                raise self.unsupported(node, "DPRNT prints plain variables only")
+            xyz.append(self.var(c.name))
+        return {"kind": "centre", "feature": node.feature, "xyz": xyz,
+                "fmt": self.DPRNT_FORMAT[self.units]}
+
+    def targets(self, p: ir.Point) -> list[str]:
+        """Assignments of a target point to the three scratch variables."""
+        return [f"{self.scratch(k)}={self.expr(c)}" for k, c in enumerate(p)]
+
+    def move(self, node: ir.Move) -> dict[str, Any]:
+        xyz = [self.addr(c) for c in node.target]
+        if node.mode is ir.MoveMode.RAPID:
+            return {"kind": "rapid", "xyz": xyz}
+        if node.mode is ir.MoveMode.RETRACT:
+            return {"kind": "retract", "xyz": xyz, "f": self.feed(self.setup.position_feed)}
+        return {"kind": "protected", "set": self.targets(node.target),
+                "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.position_feed),
+                "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label()}
+
+    def touch(self, node: ir.Touch) -> dict[str, Any]:
+        r = self.setup.ball_diameter / 2.0
+        k = r - node.overtravel
+        end = tuple(c + k * n for c, n in zip(node.contact, node.normal, strict=True))
+        stores = [f"{self.var(name)}=#{5061 + axis}" for axis, name in enumerate(node.store)
+                  if name is not None]
+        return {"kind": "touch", "set": self.targets(end),  # type: ignore[arg-type]
+                "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.probe_feed),
+                "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label(),
+                "tag": node.role.value, "feature": node.feature, "index": node.index,
+                "stores": stores, "fmt": self.DPRNT_FORMAT[self.units]}
+
+    def assign(self, node: ir.Assign) -> dict[str, Any]:
+        if node.b is not None:
+            value = f"[{self.expr(node.a)}+{self.expr(node.b)}]/2"
+        else:
+            value = self.expr(node.a + node.offset if isinstance(node.a, ir.Var)
+                              else node.a + node.offset)
+        return {"kind": "assign", "var": self.var(node.name), "value": value}

@@ -1,0 +1,119 @@
+"""The ``ProbegenError`` family.
+
+Every bad input (spec, STEP model, returned data, serial noise) ends in one of these,
+with a message that says *where* (file, key path or line/column), *what was expected*
+and *what was found*.  The CLI prints ``str(error)`` and exits with ``error.exit_code``;
+a traceback is only ever shown for a bug, never for a user error.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Diagnostic:
+    """One problem found in outside data, kept beside the good data that was read.
+
+    Attributes:
+        source: file name (or ``<stdin>``, ``<serial>``).
+        line: 1-based line number, 0 when unknown.
+        column: 1-based column number, 0 when unknown.
+        message: what was expected and what was found.
+        text: the offending line, for the caret display.
+    """
+
+    source: str
+    line: int
+    column: int
+    message: str
+    text: str = ""
+
+    def __str__(self) -> str:
+        where = self.source
+        if self.line:
+            where += f":{self.line}"
+            if self.column:
+                where += f":{self.column}"
+        out = f"{where}: {self.message}"
+        if self.text:
+            out += "\n" + caret(self.text, self.column)
+        return out
+
+
+def caret(text: str, column: int) -> str:
+    """Return ``text`` and a caret line under 1-based ``column`` (tabs kept aligned)."""
+    line = text.rstrip("\r\n")
+    pad = "".join("\t" if ch == "\t" else " " for ch in line[: max(column - 1, 0)])
+    return f"    {line}\n    {pad}^"
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """Return ``" (did you mean 'x'?)"`` for the closest choice, or ``""``."""
+    close = difflib.get_close_matches(word, sorted(choices), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+class ProbegenError(Exception):
+    """Base of every error probegen raises on purpose.
+
+    ``exit_code`` is what the CLI returns for it (see ``probegen.cli.ExitCode``).
+    """
+
+    exit_code = 1
+
+
+class SpecError(ProbegenError):
+    """The feature spec or machine profile is invalid (file, key path, value)."""
+
+    exit_code = 2
+
+
+class ModelError(ProbegenError):
+    """The part model (STEP) cannot be used: missing, empty, truncated, not STEP."""
+
+    exit_code = 3
+
+
+class PlanningError(ProbegenError):
+    """No safe measuring plan exists for the request."""
+
+    exit_code = 4
+
+
+class CollisionError(PlanningError):
+    """A planned move would bring the stylus into the part."""
+
+    exit_code = 4
+
+
+class UnsupportedError(ProbegenError):
+    """An IR node (or a statement of an input program) a dialect cannot express."""
+
+    exit_code = 5
+
+
+class ParseError(ProbegenError):
+    """Text that does not follow its grammar; carries the diagnostics (line, column, caret)."""
+
+    exit_code = 6
+
+    def __init__(self, message: str, diagnostics: tuple[Diagnostic, ...] = ()) -> None:
+        super().__init__(message)
+        self.diagnostics = diagnostics
+
+
+class ProgramParseError(ParseError):
+    """A measuring program (DMIS, Macro B) that does not parse."""
+
+
+class ResultsParseError(ParseError):
+    """Returned data (DPRNT log, DMIS output) that does not parse."""
+
+
+class CalibrationError(ProbegenError):
+    """Calibration data that cannot determine what was asked."""
+
+    exit_code = 7

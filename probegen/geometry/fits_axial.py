@@ -1,0 +1,249 @@
+"""Least-squares fits of surfaces of revolution: cylinder, cone, torus.
+
+Each fit starts the solver from every candidate axis (principal directions of the data
+and axes of the algebraic quadric; see ``fits_initial.candidate_axes``), with a linear
+fit about that axis for the remaining parameters, and keeps the solution of least
+cost.  In the local frame of the solver the shape's axis is +Z through the origin; with
+``rho`` the distance of a point from the axis and ``z`` its height:
+
+* cylinder, parameters ``(r)``: ``d = rho - r``;
+* cone, parameters ``(psi, s)``: ``d = rho cos(psi) - z sin(psi) - s`` with ``psi`` the
+  half angle and ``s`` the orthogonal distance from the origin to the surface;
+* torus, parameters ``(R, r)``: ``d = hypot(rho - R, z) - r``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from probegen.geometry.fits_initial import (
+    algebraic_circle,
+    algebraic_cone,
+    candidate_axes,
+)
+from probegen.geometry.fits_results import ConeFit, CylinderFit, TorusFit
+from probegen.geometry.fits_solver import (
+    FloatArray,
+    Model,
+    Normalised,
+    Pose,
+    Solution,
+    as_points,
+    canonical,
+    check_finite,
+    fit_error,
+    guarded,
+    multi_start,
+    normalise,
+    require_rank,
+    safe_ratio,
+    step_tolerance,
+    summary,
+    vec3,
+)
+from probegen.geometry.frames import rotation_to_z
+
+# ------------------------------------------------------------------------- models
+
+
+def _polar(q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Return ``(rho, x / rho, y / rho)`` for local points ``q : (n, 3)``."""
+    rho = np.hypot(q[:, 0], q[:, 1])
+    return rho, safe_ratio(q[:, 0], rho), safe_ratio(q[:, 1], rho)
+
+
+def _cylinder_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
+    return np.asarray(np.hypot(q[:, 0], q[:, 1]) - shape[0])
+
+
+def _cylinder_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
+    _, ux, uy = _polar(q)
+    z = q[:, 2]
+    return np.column_stack([-ux, -uy, -ux * z, -uy * z, -np.ones(len(q))])
+
+
+def _cone_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
+    rho = np.hypot(q[:, 0], q[:, 1])
+    return np.asarray(rho * math.cos(shape[0]) - q[:, 2] * math.sin(shape[0]) - shape[1])
+
+
+def _cone_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
+    rho, ux, uy = _polar(q)
+    x, y, z = q.T
+    c, s = math.cos(shape[0]), math.sin(shape[0])
+    return np.column_stack([-ux * c, -uy * c, -ux * z * c - x * s, -uy * z * c - y * s,
+                            -rho * s - z * c, -np.ones(len(q))])
+
+
+def _torus_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
+    rho = np.hypot(q[:, 0], q[:, 1])
+    return np.asarray(np.hypot(rho - shape[0], q[:, 2]) - shape[1])
+
+
+def _torus_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
+    rho, ux, uy = _polar(q)
+    x, y, z = q.T
+    u = rho - shape[0]
+    w = np.hypot(u, z)
+    cu, cz = safe_ratio(u, w), safe_ratio(z, w)
+    return np.column_stack([-cu * ux, -cu * uy, -cz, cz * x - cu * ux * z,
+                            cz * y - cu * uy * z, -cu, -np.ones(len(q))])
+
+
+CYLINDER = Model("cylinder", (0, 1, 3, 4), _cylinder_residuals, _cylinder_jacobian)
+CONE = Model("cone", (0, 1, 3, 4), _cone_residuals, _cone_jacobian)
+TORUS = Model("torus", (0, 1, 2, 3, 4), _torus_residuals, _torus_jacobian)
+
+# ---------------------------------------------------------------- starting guesses
+
+
+def _start_cylinder(q: FloatArray, axis: FloatArray) -> tuple[Pose, FloatArray] | None:
+    """Pose and ``(r,)`` from a circle fitted to the points projected along ``axis``."""
+    rot = rotation_to_z(axis)
+    circle = algebraic_circle((q @ rot.T)[:, :2])
+    if circle is None:
+        return None
+    centre, radius = circle
+    return Pose(rot.T @ np.append(centre, 0.0), rot), np.array([radius])
+
+
+def _start_cone(q: FloatArray, axis: FloatArray) -> tuple[Pose, FloatArray] | None:
+    """Pose and ``(psi, s)`` from the linear cone about ``axis``."""
+    rot = rotation_to_z(axis)
+    guess = algebraic_cone(q @ rot.T)
+    if guess is None:
+        return None
+    centre, radius, slope = guess
+    psi = math.atan(slope)
+    return Pose(rot.T @ np.append(centre, 0.0), rot), np.array([psi, radius * math.cos(psi)])
+
+
+def _start_torus(q: FloatArray, axis: FloatArray) -> tuple[Pose, FloatArray] | None:
+    """Pose and ``(R, r)``: centre from the projected circle, then the tube's section
+    as a circle in the ``(rho, z)`` half-plane."""
+    rot = rotation_to_z(axis)
+    local = q @ rot.T
+    ring = algebraic_circle(local[:, :2])
+    if ring is None:
+        return None
+    rho = np.hypot(local[:, 0] - ring[0][0], local[:, 1] - ring[0][1])
+    tube = algebraic_circle(np.column_stack([rho, local[:, 2]]))
+    if tube is None:
+        return None
+    (major, height), minor = tube
+    origin = rot.T @ np.array([ring[0][0], ring[0][1], height])
+    return Pose(origin, rot), np.array([major, minor])
+
+
+Start = Callable[[FloatArray, FloatArray], tuple[Pose, FloatArray] | None]
+
+
+def _solve(model: Model, data: Normalised, start: Start) -> Solution:
+    """Refine from every candidate axis and keep the best solution."""
+    q = data.points
+    starts = [start(q, axis) for axis in candidate_axes(q, data.directions)]
+    usable = [s for s in starts if s is not None]
+    return multi_start(model, q, usable, step_tol=step_tolerance(data))
+
+
+def _prepare(points: ArrayLike, fit: str, minimum: int) -> Normalised:
+    """Check the input, normalise it, and require points not all on one line."""
+    data = normalise(as_points(points, fit=fit, dim=3, minimum=minimum), fit=fit)
+    require_rank(data, 2, fit=fit, expected=f"at least {minimum} points not all collinear")
+    return data
+
+
+def _axis_point(data: Normalised, pose: Pose) -> tuple[float, FloatArray]:
+    """Return ``(t, point)``: the centroid's height on the axis (normalised units) and
+    its projection onto the axis in input units."""
+    t = -float(pose.origin @ pose.axis)
+    return t, data.to_world(pose.origin + t * pose.axis)
+
+
+# ------------------------------------------------------------------------- public
+
+
+@guarded("cylinder")
+def fit_cylinder(points: ArrayLike) -> CylinderFit:
+    """Least-squares (orthogonal distance) cylinder.
+
+    Args:
+        points: ``(n, 3)`` float, ``n >= 5``, not all collinear.
+
+    Returns:
+        The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
+        has its largest-magnitude component positive, residuals are ``+`` outside.
+
+    Raises:
+        ProbegenError: too few, non-finite or collinear points, or no solution.
+    """
+    data = _prepare(points, "cylinder", 5)
+    sol = _solve(CYLINDER, data, _start_cylinder)
+    _, point = _axis_point(data, sol.pose)
+    radius = float(sol.shape[0]) * data.scale
+    check_finite("cylinder", point, radius)
+    if not radius > 0.0:
+        raise fit_error("cylinder", "points around an axis", f"radius {radius:g}")
+    residuals, rms, form = summary("cylinder", sol.residuals * data.scale)
+    return CylinderFit(vec3(point), vec3(canonical(sol.pose.axis)),
+                       radius, residuals, rms, form, len(residuals))
+
+
+@guarded("cone")
+def fit_cone(points: ArrayLike) -> ConeFit:
+    """Least-squares (orthogonal distance) cone.
+
+    Args:
+        points: ``(n, 3)`` float, ``n >= 6``, not all collinear.
+
+    Returns:
+        The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
+        points to increasing radius, ``half_angle`` is in ``[0, pi/2)``, ``radius`` is
+        the section radius at ``point``; residuals are ``+`` away from the axis.
+
+    Raises:
+        ProbegenError: too few, non-finite or collinear points, or no cone (e.g. the
+        solution flattens to a plane).
+    """
+    data = _prepare(points, "cone", 6)
+    sol = _solve(CONE, data, _start_cone)
+    t, point = _axis_point(data, sol.pose)
+    psi, dist = float(sol.shape[0]), float(sol.shape[1]) + t * math.sin(sol.shape[0])
+    axis = sol.pose.axis if psi >= 0.0 else -sol.pose.axis
+    psi = abs(psi)
+    check_finite("cone", point, psi, dist)
+    if not psi < math.pi / 2 - 1e-9:
+        raise fit_error("cone", "a half angle below 90 degrees", f"{math.degrees(psi):g}")
+    residuals, rms, form = summary("cone", sol.residuals * data.scale)
+    return ConeFit(vec3(point), vec3(axis), psi,
+                   dist * data.scale / math.cos(psi), residuals, rms, form, len(residuals))
+
+
+@guarded("torus")
+def fit_torus(points: ArrayLike) -> TorusFit:
+    """Least-squares (orthogonal distance) torus.
+
+    Args:
+        points: ``(n, 3)`` float, ``n >= 7``, not all collinear.
+
+    Returns:
+        The fit; ``axis`` has its largest-magnitude component positive, residuals are
+        ``+`` outside the tube.
+
+    Raises:
+        ProbegenError: too few, non-finite or collinear points, or no solution.
+    """
+    data = _prepare(points, "torus", 7)
+    sol = _solve(TORUS, data, _start_torus)
+    centre = data.to_world(sol.pose.origin)
+    major, minor = (float(v) * data.scale for v in sol.shape)
+    check_finite("torus", centre, major, minor)
+    if not minor > 0.0:
+        raise fit_error("torus", "points around a tube", f"minor radius {minor:g}")
+    residuals, rms, form = summary("torus", sol.residuals * data.scale)
+    return TorusFit(vec3(centre), vec3(canonical(sol.pose.axis)),
+                    major, minor, residuals, rms, form, len(residuals))

@@ -1,0 +1,211 @@
+"""The dialect-neutral measuring program.
+
+Frozen slotted dataclasses with tuple coordinates; never numpy arrays or OCP objects.
+All lengths are millimetres in the work coordinate system; a dialect converts units.
+
+A coordinate is either a number or a ``Var``: a value the controller computes at run time
+(e.g. the centre of a sphere it has just located) plus a constant offset.  Dialects that
+cannot compute at run time (DMIS) reject ``Var`` with ``UnsupportedError``.
+
+Move modes:
+    ``RAPID``: positioning at rapid rate; the planner only uses it at the clearance plane.
+    ``PROTECTED``: positioning with the probe armed; an unexpected trigger stops the
+        program with an alarm (Fanuc: a G31 move and a check of the skip position).
+    ``RETRACT``: a plain feed move straight back from a touch, along the approach line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+
+@dataclass(frozen=True, slots=True)
+class Var:
+    """A run-time value ``name`` plus a constant ``offset`` (mm)."""
+
+    name: str
+    offset: float = 0.0
+
+    def __add__(self, other: float) -> Var:
+        return Var(self.name, self.offset + other)
+
+
+Coord = float | Var
+Point = tuple[Coord, Coord, Coord]
+Vec3 = tuple[float, float, float]
+
+
+class MoveMode(Enum):
+    """How a move is made; see the module docstring."""
+
+    RAPID = "rapid"
+    PROTECTED = "protected"
+    RETRACT = "retract"
+
+
+class TouchRole(Enum):
+    """Why a touch is made: to find the part (``LOC``) or to measure it (``PT``)."""
+
+    LOCATE = "LOC"
+    MEASURE = "PT"
+
+
+@dataclass(frozen=True, slots=True)
+class Setup:
+    """Everything the program must set before moving (it relies on no controller state).
+
+    Attributes:
+        program_number: O-number / program id.
+        program_name: short upper-case name.
+        units: ``mm`` or ``inch`` for the emitted program (IR values stay mm).
+        work_offset: ``G54`` .. ``G59``.
+        clearance_z: the clearance plane, work coordinates, mm.
+        ball_diameter: stylus ball diameter, mm.
+        shank_diameter: stylus shank diameter, mm.
+        tool_number: the probe's tool and length-offset number.
+        tool_change: whether to call the probe with a tool change.
+        position_feed: protected positioning feed, mm/min.
+        probe_feed: probing feed, mm/min.
+        probe_on: blocks that switch the probe on.
+        probe_off: blocks that switch it off.
+        variable_base: first controller variable the program may use.
+        reset_codes: modal codes set in the header (see ``MachineProfile``).
+        probe_length: stylus length from the ball centre, mm.
+    """
+
+    program_number: int
+    program_name: str
+    units: str
+    work_offset: str
+    clearance_z: float
+    ball_diameter: float
+    shank_diameter: float
+    tool_number: int
+    tool_change: bool
+    position_feed: float
+    probe_feed: float
+    probe_on: tuple[str, ...]
+    probe_off: tuple[str, ...]
+    variable_base: int
+    reset_codes: tuple[str, ...]
+    probe_length: float
+
+
+@dataclass(frozen=True, slots=True)
+class Comment:
+    """A comment line."""
+
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class Move:
+    """A positioning move of the ball centre to ``target``."""
+
+    target: Point
+    mode: MoveMode
+
+
+@dataclass(frozen=True, slots=True)
+class Touch:
+    """One probing move: from the ball-centre ``start`` along ``-normal`` until contact.
+
+    Attributes:
+        feature: feature id.
+        index: 1-based touch index within the feature and role.
+        role: locate or measure.
+        contact: nominal contact point on the surface.
+        normal: outward unit surface normal at ``contact`` (the approach is along -normal).
+        approach: distance of the start point off the surface (ball surface to part), mm.
+        overtravel: how far past the nominal contact the move may go, mm.
+        store: run-time variable names that receive the skip position's X, Y, Z (or None).
+    """
+
+    feature: str
+    index: int
+    role: TouchRole
+    contact: Point
+    normal: Vec3
+    approach: float
+    overtravel: float
+    store: tuple[str | None, str | None, str | None] = (None, None, None)
+
+
+@dataclass(frozen=True, slots=True)
+class Assign:
+    """``name = (a + b) / 2`` when ``b`` is given, else ``name = a + offset``."""
+
+    name: str
+    a: Coord
+    b: Coord | None = None
+    offset: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class ReportCentre:
+    """Print a run-time centre (the DPRNT ``CTR`` line)."""
+
+    feature: str
+    centre: Point
+
+
+@dataclass(frozen=True, slots=True)
+class SphereDef:
+    """A nominal sphere feature (DMIS ``FEAT/SPHERE``)."""
+
+    id: str
+    centre: Vec3
+    diameter: float
+    inner: bool = False
+
+
+FeatureDef = SphereDef
+
+
+@dataclass(frozen=True, slots=True)
+class FeatureBlock:
+    """The touches that measure one feature, with the moves between them."""
+
+    feature: FeatureDef
+    body: tuple[Node, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class LocalFrame:
+    """Work in a frame whose origin is the centre of the feature just measured.
+
+    DMIS: ``D(name)=TRANS/XORIG,FA(f),YORIG,FA(f),ZORIG,FA(f)``.  Coordinates after it are
+    relative to that centre until the matching ``RestoreFrame``.
+    """
+
+    name: str
+    feature: str
+
+
+@dataclass(frozen=True, slots=True)
+class RestoreFrame:
+    """Return to the frame in force before the last ``LocalFrame``."""
+
+    name: str
+
+
+Node = Comment | Move | Touch | Assign | ReportCentre | FeatureBlock | LocalFrame | RestoreFrame
+
+
+@dataclass(frozen=True, slots=True)
+class Program:
+    """A whole measuring program: the setup, then the body in order."""
+
+    setup: Setup
+    body: tuple[Node, ...]
+
+
+def walk(nodes: tuple[Node, ...]) -> list[Node]:
+    """Flatten ``FeatureBlock`` bodies into one list, blocks kept before their bodies."""
+    out: list[Node] = []
+    for node in nodes:
+        out.append(node)
+        if isinstance(node, FeatureBlock):
+            out += walk(node.body)
+    return out

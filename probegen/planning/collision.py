@@ -1,0 +1,326 @@
+"""Collision check: the stylus ball and shank swept along every move, against the part.
+
+The check walks the IR as a controller would (nominal values for run-time variables,
+``LocalFrame`` offsets applied) and follows every segment by sphere tracing: the distance
+between the stylus and the part changes no faster than the stylus moves (it is
+1-Lipschitz in the stylus position), so from a point whose clearance exceeds the required
+one by ``s`` the next ``s`` mm of the segment are clear.  Steps never go below
+``MIN_STEP``; a clearance below the requirement is a collision.  This is exact up to the
+mesh's chordal deviation, which is subtracted from every clearance.
+
+Uncertain part position: a coordinate known only to ``u`` (an absolute coordinate while
+the feature is still being located) adds ``u`` to the required clearance; along a segment
+from an uncertain start to an exact end (relative to the found centre) the extra clearance
+falls linearly from ``u`` to 0, which is exactly how far the segment can be off relative to
+the part at each point.
+
+Touches: the ball must clear the part from the touch's start until it is ``margin``
+(+ the extra) short of the nominal contact; the retract that follows runs back along the
+same line.  The shank must clear the part along the same stretch.
+
+Obstacles: the tessellated STEP model as an FCL bounding-volume hierarchy (python-fcl:
+exact sphere/cylinder-to-triangle distances in C++), or analytic spheres when the spec
+gives the geometry without a model.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from probegen import ir
+from probegen.errors import CollisionError, PlanningError
+from probegen.machine.profile import MachineProfile
+
+MIN_STEP = 0.01
+"""Smallest sphere-tracing step, mm; a segment closer than this to the limit is stepped
+at this pitch, and the clearance between samples can be lower by at most half of it."""
+MESH_TOLERANCE = 0.01
+"""Chordal deviation of the part mesh, mm; subtracted from every measured clearance."""
+
+
+@dataclass(frozen=True, slots=True)
+class Stylus:
+    """The parts of the stylus that can touch: ball radius, shank radius and length."""
+
+    ball: float
+    shank: float
+    length: float
+
+
+class Obstacle(Protocol):
+    """The part, as distances to the stylus."""
+
+    def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
+        """Distances (mm) from the ball and from the shank, with the ball at ``centre``."""
+        ...
+
+    def name_at(self, point: np.ndarray) -> str:
+        """A human name for the obstacle nearest ``point`` (e.g. ``face 3``)."""
+        ...
+
+
+@dataclass(frozen=True)
+class SphereObstacle:
+    """Analytic spheres: ``centres : (k, 3)``, ``radii : (k,)``."""
+
+    centres: np.ndarray
+    radii: np.ndarray
+
+    def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
+        ball = np.linalg.norm(self.centres - centre, axis=1) - self.radii - stylus.ball
+        rel = self.centres - centre
+        h = np.clip(rel[:, 2], stylus.ball, stylus.length)
+        axis_pt = np.zeros_like(rel)
+        axis_pt[:, 2] = h
+        shank = np.linalg.norm(rel - axis_pt, axis=1) - self.radii - stylus.shank
+        return float(ball.min()), float(shank.min())
+
+    def name_at(self, point: np.ndarray) -> str:
+        k = int(np.argmin(np.linalg.norm(self.centres - point, axis=1) - self.radii))
+        return f"sphere {k + 1}"
+
+
+class MeshObstacle:
+    """A tessellated part; ``face_ids`` maps triangles to model face ids when known."""
+
+    def __init__(self, mesh: Any, face_ids: np.ndarray | None) -> None:
+        import fcl
+
+        self.fcl = fcl
+        self.mesh = mesh
+        self.face_ids = face_ids
+        bvh = fcl.BVHModel()
+        bvh.beginModel(len(mesh.vertices), len(mesh.faces))
+        bvh.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
+                        np.asarray(mesh.faces, dtype=np.int32))
+        bvh.endModel()
+        self.part = fcl.CollisionObject(bvh, fcl.Transform())
+        self.request = fcl.DistanceRequest()
+        self._objects: dict[Stylus, tuple[Any, Any]] = {}
+
+    def _stylus(self, stylus: Stylus) -> tuple[Any, Any]:
+        if stylus not in self._objects:
+            fcl = self.fcl
+            shank_len = stylus.length - stylus.ball
+            self._objects[stylus] = (
+                fcl.CollisionObject(fcl.Sphere(stylus.ball), fcl.Transform()),
+                fcl.CollisionObject(fcl.Cylinder(stylus.shank, shank_len), fcl.Transform()),
+            )
+        return self._objects[stylus]
+
+    def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
+        ball, shank = self._stylus(stylus)
+        ball.setTranslation(centre)
+        mid = (stylus.ball + stylus.length) / 2.0
+        shank.setTranslation(centre + np.array([0.0, 0.0, mid]))
+        out = []
+        for obj in (ball, shank):
+            d = self.fcl.distance(obj, self.part, self.request, self.fcl.DistanceResult())
+            out.append(max(float(d), 0.0) - MESH_TOLERANCE)
+        return out[0], out[1]
+
+    def inside(self, point: np.ndarray) -> bool:
+        """Whether ``point`` lies inside the material (a mesh query, for segment starts)."""
+        return bool(self.mesh.contains(point[None])[0])
+
+    def name_at(self, point: np.ndarray) -> str:
+        _, _, tri = self.mesh.nearest.on_surface(point[None])
+        if self.face_ids is None:
+            return f"triangle {int(tri[0])}"
+        return f"face {int(self.face_ids[int(tri[0])])}"
+
+
+@functools.cache
+def load_model(path: str) -> Any:
+    """Load a STEP model once per process (planning reads it for faces and the mesh)."""
+    from probegen import cad
+
+    return cad.load_step(path)
+
+
+def obstacle_for(model: Path | None, spheres: Sequence[Any]) -> Obstacle:
+    """The part as an obstacle: its mesh, or the spheres when there is no model."""
+    if model is not None:
+        from probegen import cad
+
+        mesh = cad.tessellate(load_model(str(model)))
+        return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+    centres = np.array([s.centre for s in spheres], dtype=np.float64).reshape(-1, 3)
+    radii = np.array([s.diameter / 2.0 for s in spheres], dtype=np.float64)
+    return SphereObstacle(centres, radii)
+
+
+@dataclass(frozen=True, slots=True)
+class SegmentClearance:
+    """The smallest clearance found along one segment (ball and shank), mm."""
+
+    index: int
+    kind: str
+    feature: str
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    ball: float
+    shank: float
+
+
+@dataclass(frozen=True, slots=True)
+class ClearanceReport:
+    """Every checked segment, and the smallest clearance of all."""
+
+    segments: tuple[SegmentClearance, ...]
+
+    @property
+    def minimum(self) -> float:
+        """The smallest clearance over all segments (ball or shank), mm."""
+        return min((min(s.ball, s.shank) for s in self.segments), default=float("inf"))
+
+
+class _Walker:
+    """Evaluates IR coordinates nominally, as the controller would at run time."""
+
+    def __init__(self, plans: Sequence[Any], r: float) -> None:
+        self.values: dict[str, float] = {}
+        self.frames: list[tuple[str, np.ndarray]] = []
+        self.r = r
+        self.uncertainty = max(
+            (p.feature.locate_uncertainty for p in plans if p.feature.locate), default=0.0)
+        self.centres = {p.feature.id: np.array(p.sphere.centre) for p in plans}
+        self.centres.update({f"{p.feature.id}L": np.array(p.sphere.centre) for p in plans})
+
+    def value(self, c: ir.Coord) -> float:
+        if isinstance(c, ir.Var):
+            if c.name not in self.values:
+                raise PlanningError(f"run-time variable {c.name} is used before it is set")
+            return self.values[c.name] + c.offset
+        return c
+
+    def origin(self) -> np.ndarray:
+        """The current frame's origin in work coordinates."""
+        return self.frames[-1][1] if self.frames else np.zeros(3)
+
+    def point(self, p: ir.Point) -> np.ndarray:
+        return self.origin() + np.array([self.value(c) for c in p])
+
+    def exact(self, p: ir.Point) -> bool:
+        """Whether the point is known exactly relative to the part."""
+        if self.frames:
+            return True
+        return all(isinstance(c, ir.Var) and c.name[-3:] in ("_CX", "_CY", "_CZ") for c in p)
+
+    def extra(self, p: ir.Point) -> float:
+        return 0.0 if self.exact(p) else self.uncertainty
+
+
+def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
+                  machine: MachineProfile) -> ClearanceReport:
+    """Check every move of ``program``; raise ``CollisionError`` at the first bad one."""
+    setup = program.setup
+    r = setup.ball_diameter / 2.0
+    clear = machine.margin / 2.0
+    w = _Walker(plans, r)
+    probe = machine.probe
+    stylus = Stylus(r, probe.shank_diameter / 2.0, probe.length)
+    pos: np.ndarray | None = None
+    pos_extra = 0.0
+    touch_start: np.ndarray | None = None
+    feature = ""
+    out: list[SegmentClearance] = []
+
+    def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str) -> None:
+        inside = getattr(obstacle, "inside", None)
+        if inside is not None and inside(a):
+            raise CollisionError(f"feature {feature or '-'}: segment {len(out) + 1} ({kind}) "
+                                 f"starts inside the part at {_fmt(a)}")
+        ball, shank, worst = _sweep(obstacle, a, b, ea, eb, stylus, clear)
+        seg = SegmentClearance(len(out) + 1, kind, feature, _t(a), _t(b), ball - clear,
+                               shank - clear)
+        out.append(seg)
+        if min(seg.ball, seg.shank) < 0.0:
+            part = "ball" if seg.ball < seg.shank else "shank"
+            gap = min(seg.ball, seg.shank) + clear
+            how = (f"comes within {gap:.3f} mm of" if gap >= 0.0
+                   else f"cuts {-gap:.3f} mm into")
+            raise CollisionError(
+                f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
+                f"{_fmt(a)} to {_fmt(b)}: the stylus {part} {how} {obstacle.name_at(worst)}; "
+                f"expected a clearance of at least {clear:.3f} mm")
+
+    for node in ir.walk(program.body):
+        if isinstance(node, ir.FeatureBlock):
+            feature = node.feature.id
+        elif isinstance(node, ir.Assign):
+            a = w.value(node.a)
+            w.values[node.name] = (a + w.value(node.b)) / 2.0 if node.b is not None else (
+                a + node.offset)
+        elif isinstance(node, ir.LocalFrame):
+            w.frames.append((node.name, w.centres[node.feature]))
+        elif isinstance(node, ir.RestoreFrame):
+            w.frames.pop()
+        elif isinstance(node, ir.Move):
+            target, extra = w.point(node.target), w.extra(node.target)
+            if node.mode is ir.MoveMode.RETRACT:
+                if touch_start is None or not np.allclose(target, touch_start, atol=1e-9):
+                    raise PlanningError(f"feature {feature}: a retract must return to the "
+                                        f"start of its touch, found {_fmt(target)}")
+            elif pos is not None:
+                check(pos, target, pos_extra, extra, node.mode.value)
+            pos, pos_extra, touch_start = target, extra, None
+        elif isinstance(node, ir.Touch):
+            feature = node.feature
+            n = np.array(node.normal)
+            contact = w.point(node.contact)
+            start = contact + (r + node.approach) * n
+            if pos is None or not np.allclose(pos, start, atol=1e-9):
+                raise PlanningError(f"feature {feature}: touch {node.index} does not start at "
+                                    f"its approach point {_fmt(start)}")
+            e = w.extra(node.contact)
+            stop = contact + (r + clear + MIN_STEP + MESH_TOLERANCE + e) * n
+            check(start, stop, e, e, f"touch {node.role.value} {node.index}")
+            for axis, name in enumerate(node.store):
+                if name is not None:
+                    w.values[name] = float((contact + r * n - w.origin())[axis])
+            touch_start = start
+    return ClearanceReport(tuple(out))
+
+
+def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float,
+           stylus: Stylus, required: float) -> tuple[float, float, np.ndarray]:
+    """Smallest ball and shank clearances along ``a → b`` by sphere tracing.
+
+    Each clearance is less the uncertainty ``(1-t)·ea + t·eb``.  That function of the arc
+    length ``s`` is Lipschitz with constant ``k = 1 + |ea - eb| / length``, so from a point
+    where it exceeds ``required`` by ``x`` the next ``x / k`` mm stay above ``required``.
+    """
+    length = float(np.linalg.norm(b - a))
+    k = 1.0 + (abs(ea - eb) / length if length else 0.0)
+    worst_ball = worst_shank = np.inf
+    worst = a
+    t = 0.0
+    while True:
+        p = a + t * (b - a)
+        extra = (1.0 - t) * ea + t * eb
+        ball, shank = obstacle.clearance(p, stylus)
+        ball, shank = ball - extra, shank - extra
+        if min(ball, shank) < min(worst_ball, worst_shank):
+            worst = p
+        worst_ball, worst_shank = min(worst_ball, ball), min(worst_shank, shank)
+        if t >= 1.0 or length == 0.0:
+            break
+        step = max((min(ball, shank) - required) / k, MIN_STEP)
+        t = min(t + step / length, 1.0)
+    slack = MIN_STEP / 2.0
+    return worst_ball - slack, worst_shank - slack, worst
+
+
+def _t(v: np.ndarray) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _fmt(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:.3f}" for x in v) + ")"

@@ -1,0 +1,218 @@
+"""The feature spec: TOML in, frozen dataclasses out, validated with key paths.
+
+Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md``)::
+
+    [part]
+    model = "sphere25.step"        # relative to this file; optional when features give
+    units = "mm"                   # their geometry explicitly ("mm" | "inch")
+
+    [machine]
+    profile = "../machines/vmc-fanuc.toml"   # relative to this file
+    dialect = "fanuc"              # optional: overrides the profile's dialect
+    clearance_z = 120.0            # optional: overrides the profile's clearance plane
+
+    [program]
+    number = 1001                  # O-number (Fanuc) / program id
+    name = "SPHERE TEST"
+
+    [[feature]]
+    id = "SPH1"                    # [A-Z][A-Z0-9]{0,11}, unique
+    kind = "sphere_test"
+    face = 1                       # or at = [x, y, z], or centre = [x, y, z] + diameter
+    diameter = 25.0                # calibrated diameter (default: the model's)
+    layout = "octahedral"          # iso | octahedral | cap
+    points = 25                    # cap only
+    max_polar_angle = 90.0         # cap only, degrees from the pole
+    retract = 5.0                  # optional; must be >= the safe minimum (M1)
+    locate = true                  # find the real centre first (machine tools)
+    locate_uncertainty = 2.0       # how far the real centre may be from nominal
+
+Every problem is a ``SpecError`` naming the file, the key path and the value found.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from probegen.constants import MM_PER_INCH
+from probegen.errors import SpecError, did_you_mean
+from probegen.machine.profile import MachineProfile, load_profile
+from probegen.tomlread import Table, load_toml
+
+Vec3 = tuple[float, float, float]
+
+FEATURE_KINDS = ("sphere_test",)
+"""Feature kinds this version plans (more arrive with methods M2 and M3)."""
+
+SPHERE_LAYOUTS = ("iso", "octahedral", "cap")
+_ID = re.compile(r"[A-Z][A-Z0-9]{0,11}\Z")
+
+
+@dataclass(frozen=True, slots=True)
+class SphereTest:
+    """A 25-point (or n-point) probing test on a reference sphere (method M1).
+
+    Attributes:
+        id: feature id, printed in the DPRNT log and used as the DMIS label.
+        where: ``file: feature[i]`` for error messages.
+        face: model face id of the sphere, or None.
+        at: a point near the sphere face, or None.
+        centre: explicit nominal centre (mm), or None.
+        diameter: calibrated diameter (mm), or None to take the model's.
+        layout: ``iso``, ``octahedral`` or ``cap``.
+        points: number of points.
+        max_polar_angle: largest polar angle from the pole, degrees.
+        retract: user retract distance (mm), or None for the safe minimum plus margin.
+        locate: whether the program first finds the real centre.
+        locate_uncertainty: how far the real centre may be from nominal (mm).
+    """
+
+    id: str
+    where: str
+    face: int | None
+    at: Vec3 | None
+    centre: Vec3 | None
+    diameter: float | None
+    layout: str
+    points: int
+    max_polar_angle: float
+    retract: float | None
+    locate: bool
+    locate_uncertainty: float
+
+
+Feature = SphereTest
+
+
+@dataclass(frozen=True, slots=True)
+class Spec:
+    """A validated feature spec.
+
+    Attributes:
+        source: the spec file as given.
+        model: the part model path (resolved against the spec's folder), or None.
+        machine: the machine profile.
+        dialect: the dialect to emit.
+        clearance_z: the clearance plane in work coordinates, mm.
+        program_number: O-number / program id.
+        program_name: a short upper-case name.
+        features: what to measure, in the order given.
+    """
+
+    source: str
+    model: Path | None
+    machine: MachineProfile
+    dialect: str
+    clearance_z: float
+    program_number: int
+    program_name: str
+    features: tuple[Feature, ...]
+
+
+def load_spec(path: str | Path) -> Spec:
+    """Load and validate a feature spec (see the module docstring for the schema)."""
+    file = str(path)
+    base = Path(path).parent
+    root = Table(load_toml(path), file, "")
+    part = root.table("part")
+    units = part.get_str("units", "mm", choices=("mm", "inch")) or "mm"
+    k = MM_PER_INCH if units == "inch" else 1.0
+    model_name = part.get_str("model")
+    part.done()
+    m = root.table("machine", required=True)
+    machine = _machine(m, base)
+    prog = root.table("program")
+    spec = Spec(
+        source=file,
+        model=base / model_name if model_name else None,
+        machine=machine,
+        dialect=m.get_str("dialect", machine.dialect) or machine.dialect,
+        clearance_z=_clearance(m, machine, k),
+        program_number=prog.get_int("number", 1001, minimum=1, maximum=9999) or 1001,
+        program_name=_program_name(prog),
+        features=_features(root, k),
+    )
+    m.done()
+    prog.done()
+    root.done()
+    return spec
+
+
+def _machine(t: Table, base: Path) -> MachineProfile:
+    name = t.get_str("profile", required=True) or ""
+    try:
+        return load_profile(base / name)
+    except SpecError as exc:
+        raise SpecError(f"{t.where('profile')}: in the machine profile: {exc}") from None
+
+
+def _clearance(t: Table, machine: MachineProfile, k: float) -> float:
+    z = t.get_float("clearance_z")
+    return machine.clearance_z if z is None else k * z
+
+
+def _program_name(t: Table) -> str:
+    name = t.get_str("name", "PROBEGEN") or "PROBEGEN"
+    if not re.fullmatch(r"[A-Z0-9 ._-]{1,24}", name):
+        raise t.fail("name", "1-24 upper-case letters, digits, blanks or . _ -")
+    return name
+
+
+def _features(root: Table, k: float) -> tuple[Feature, ...]:
+    tables = root.tables("feature")
+    if not tables:
+        raise SpecError(f"{root.file}: feature: expected at least one [[feature]], found none")
+    features = tuple(_feature(t, k) for t in tables)
+    seen: set[str] = set()
+    for t, f in zip(tables, features, strict=True):
+        if f.id in seen:
+            raise SpecError(f"{t.where('id')}: expected a unique id, found {f.id!r} again")
+        seen.add(f.id)
+    return features
+
+
+def _feature(t: Table, k: float) -> Feature:
+    fid = t.get_str("id", required=True) or ""
+    if not _ID.match(fid):
+        raise t.fail("id", "an id of 1-12 upper-case letters and digits, starting with a letter")
+    kind = t.get_str("kind", required=True) or ""
+    if kind not in FEATURE_KINDS:
+        raise SpecError(f"{t.where('kind')}: expected one of {', '.join(FEATURE_KINDS)}, "
+                        f"found {kind!r}{did_you_mean(kind, FEATURE_KINDS)}")
+    feature = _sphere_test(t, fid, k)
+    t.done()
+    return feature
+
+
+def _scaled(v: tuple[float, ...] | None, k: float) -> Vec3 | None:
+    return None if v is None else (v[0] * k, v[1] * k, v[2] * k)
+
+
+def _sphere_test(t: Table, fid: str, k: float) -> SphereTest:
+    face = t.get_int("face", minimum=1)
+    at = _scaled(t.get_vec("at"), k)
+    centre = _scaled(t.get_vec("centre"), k)
+    given = [key for key, v in (("face", face), ("at", at), ("centre", centre)) if v is not None]
+    if len(given) != 1:
+        raise SpecError(f"{t.where('face')}: expected exactly one of face, at, centre, "
+                        f"found {', '.join(given) or 'none'}")
+    diameter = t.get_float("diameter", positive=True)
+    if centre is not None and diameter is None:
+        raise SpecError(f"{t.where('diameter')}: required with centre, found none")
+    layout = t.get_str("layout", "octahedral", choices=SPHERE_LAYOUTS) or "octahedral"
+    points = t.get_int("points", 25, minimum=3, maximum=500) or 25
+    if layout != "cap" and points != 25:
+        raise t.fail("points", f"25 for the {layout} layout (use layout = \"cap\" for others)")
+    polar = t.get_float("max_polar_angle", 90.0, positive=True, maximum=150.0) or 90.0
+    if layout != "cap" and polar != 90.0:
+        raise t.fail("max_polar_angle", f"90 for the {layout} layout")
+    retract = t.get_float("retract", positive=True)
+    uncertainty = t.get_float("locate_uncertainty", 2.0, minimum=0.0) or 0.0
+    return SphereTest(
+        id=fid, where=f"{t.file}: {t.path}", face=face, at=at, centre=centre,
+        diameter=None if diameter is None else diameter * k, layout=layout, points=points,
+        max_polar_angle=polar, retract=None if retract is None else retract * k,
+        locate=t.get_bool("locate", True), locate_uncertainty=uncertainty * k,
+    )

@@ -1,0 +1,172 @@
+"""Strict reading of TOML tables into typed values, with key paths in every error.
+
+``Table`` wraps one TOML table: each ``get_*`` call names a key, checks its type and range,
+and records it as known; ``done()`` then rejects any key nobody asked for, with a
+"did you mean" for misspellings.  Every error is a ``SpecError`` naming the file, the key
+path (``feature[0].retract``) and the value found.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from probegen.errors import SpecError, did_you_mean
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file; a missing or malformed file is a ``SpecError``."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except FileNotFoundError:
+        raise SpecError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise SpecError(f"{path}: cannot read: {exc.strerror}") from None
+    try:
+        return tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise SpecError(f"{path}: expected UTF-8 text, found byte {exc.start}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"{path}: not valid TOML: {exc}") from None
+
+
+def _kind(value: Any) -> str:
+    names = {bool: "boolean", int: "integer", float: "number", str: "string",
+             list: "array", dict: "table"}
+    return names.get(type(value), type(value).__name__)
+
+
+class Table:
+    """One TOML table being read; see the module docstring."""
+
+    def __init__(self, data: Any, file: str, path: str) -> None:
+        if not isinstance(data, dict):
+            raise SpecError(f"{file}: {path}: expected a table, found {_kind(data)} {data!r}")
+        self.data: dict[str, Any] = data
+        self.file = file
+        self.path = path
+        self._known: set[str] = set()
+
+    def where(self, key: str) -> str:
+        """Return ``file: path.key`` for messages."""
+        dotted = f"{self.path}.{key}" if self.path else key
+        return f"{self.file}: {dotted}"
+
+    def fail(self, key: str, expected: str) -> SpecError:
+        """Build the error for a bad value under ``key``."""
+        return SpecError(f"{self.where(key)}: expected {expected}, found {self.data[key]!r}")
+
+    def has(self, key: str) -> bool:
+        """Whether ``key`` is present (marks it as known)."""
+        self._known.add(key)
+        return key in self.data
+
+    def _raw(self, key: str, default: Any, required: bool) -> Any:
+        self._known.add(key)
+        if key not in self.data:
+            if required:
+                unknown = [k for k in self.data if k not in self._known]
+                close = difflib.get_close_matches(key, unknown, n=1, cutoff=0.6)
+                found = f"; found {close[0]!r} instead, misspelt?" if close else ""
+                raise SpecError(f"{self.where(key)}: required key is missing{found}")
+            return default
+        return self.data[key]
+
+    def get_str(self, key: str, default: str | None = None, *, required: bool = False,
+                choices: Sequence[str] | None = None) -> str | None:
+        """A string, optionally one of ``choices``."""
+        value = self._raw(key, default, required)
+        if value is None or value is default:
+            return value
+        if not isinstance(value, str):
+            raise self.fail(key, "a string")
+        if choices is not None and value not in choices:
+            hint = did_you_mean(value, choices)
+            raise SpecError(f"{self.where(key)}: expected one of {', '.join(choices)}, "
+                            f"found {value!r}{hint}")
+        return value
+
+    def get_float(self, key: str, default: float | None = None, *, required: bool = False,
+                  minimum: float | None = None, positive: bool = False,
+                  maximum: float | None = None) -> float | None:
+        """A finite number (integers accepted), with optional bounds."""
+        value = self._raw(key, default, required)
+        if value is None or value is default:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, "a number")
+        if not math.isfinite(value):
+            raise self.fail(key, "a finite number")
+        if positive and value <= 0:
+            raise self.fail(key, "a positive number")
+        if minimum is not None and value < minimum:
+            raise self.fail(key, f"a number >= {minimum:g}")
+        if maximum is not None and value > maximum:
+            raise self.fail(key, f"a number <= {maximum:g}")
+        return float(value)
+
+    def get_int(self, key: str, default: int | None = None, *, required: bool = False,
+                minimum: int | None = None, maximum: int | None = None) -> int | None:
+        """An integer with optional bounds."""
+        value = self._raw(key, default, required)
+        if value is None or value is default:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(key, "an integer")
+        if minimum is not None and value < minimum:
+            raise self.fail(key, f"an integer >= {minimum}")
+        if maximum is not None and value > maximum:
+            raise self.fail(key, f"an integer <= {maximum}")
+        return value
+
+    def get_bool(self, key: str, default: bool) -> bool:
+        """A boolean."""
+        value = self._raw(key, default, False)
+        if not isinstance(value, bool):
+            raise self.fail(key, "true or false")
+        return value
+
+    def get_vec(self, key: str, n: int = 3) -> tuple[float, ...] | None:
+        """An array of ``n`` finite numbers, or None when absent."""
+        value = self._raw(key, None, False)
+        if value is None:
+            return None
+        ok = isinstance(value, list) and len(value) == n and all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+        if not ok:
+            raise self.fail(key, f"an array of {n} numbers")
+        return tuple(float(v) for v in value)
+
+    def get_str_list(self, key: str, default: Sequence[str] = ()) -> tuple[str, ...]:
+        """An array of strings."""
+        value = self._raw(key, list(default), False)
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise self.fail(key, "an array of strings")
+        return tuple(value)
+
+    def table(self, key: str, *, required: bool = False) -> Table:
+        """A sub-table (an empty one when absent and not required)."""
+        value = self._raw(key, {}, required)
+        return Table(value, self.file, f"{self.path}.{key}" if self.path else key)
+
+    def tables(self, key: str) -> list[Table]:
+        """An array of tables (``[[key]]``)."""
+        value = self._raw(key, [], False)
+        if not isinstance(value, list):
+            raise self.fail(key, "an array of tables ([[" + key + "]])")
+        prefix = f"{self.path}.{key}" if self.path else key
+        return [Table(v, self.file, f"{prefix}[{i}]") for i, v in enumerate(value)]
+
+    def done(self) -> None:
+        """Reject keys that no ``get_*`` asked for."""
+        for key in self.data:
+            if key not in self._known:
+                hint = did_you_mean(key, self._known)
+                raise SpecError(f"{self.where(key)}: unknown key{hint}")

@@ -1,0 +1,36 @@
+"""Shared test fixtures: the repository root, the shared reference folder, goldens."""
+
+from __future__ import annotations
+
+import difflib
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+REGEN = os.environ.get("PROBEGEN_REGEN") == "1"
+
+
+@pytest.fixture
+def in_repo(monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Run the test with the repository root as the working directory."""
+    monkeypatch.chdir(REPO)
+    return REPO
+
+
+def assert_golden(path: Path, actual: str) -> None:
+    """Compare ``actual`` with the golden file; ``PROBEGEN_REGEN=1`` rewrites it."""
+    if REGEN:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(actual, encoding="ascii", newline="\n")
+        return
+    assert path.exists(), f"missing golden file {path}: run `make goldens`"
+    expected = path.read_text(encoding="ascii")
+    if actual != expected:
+        diff = "".join(difflib.unified_diff(
+            expected.splitlines(keepends=True), actual.splitlines(keepends=True),
+            fromfile=str(path), tofile="generated"))
+        pytest.fail(f"{path} differs from the generated text (make goldens rewrites it):\n"
+                    f"{diff}", pytrace=False)

@@ -1,0 +1,51 @@
+"""The command line: compile, features, sphere-points; exit codes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from conftest import REPO
+
+from probegen.cli import ExitCode, main
+
+
+def test_compile_writes_both_dialects(in_repo: Path, tmp_path: Path,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanuc", "-d", "dmis",
+                 "-o", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == ExitCode.OK
+    assert (tmp_path / "sphere_test.nc").read_text() == (
+        REPO / "tests/golden/sphere25/sphere_test.nc").read_text()
+    assert (tmp_path / "sphere_test.dmi").exists()
+    assert "retract 2.000 mm (safe minimum 1.605 mm)" in out
+
+
+def test_sphere_points_reports_figures(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sphere-points", "--layout", "octahedral"]) == ExitCode.OK
+    out = capsys.readouterr().out.splitlines()
+    assert out[1:4] == ["min d / R     0.518", "min d / max d 0.796",
+                        "largest step  41.41 deg (zigzag order)"]
+    assert len(out) == 5 + 25
+
+
+def test_features_lists_the_sample(in_repo: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["features", "samples/sphere25/sphere25.step"]) == ExitCode.OK
+    rows = capsys.readouterr().out.splitlines()
+    assert any(r.split()[:3] == ["5", "sphere", "outer"] for r in rows)
+
+
+def test_missing_model_is_a_model_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["features", "nope.step"]) == ExitCode.MODEL
+    assert capsys.readouterr().err == "probegen: error: nope.step: no such file\n"
+
+
+def test_usage_error() -> None:
+    assert main(["compile"]) == ExitCode.USAGE
+
+
+def test_unknown_dialect(in_repo: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanc", "-o", "-"])
+    assert code == ExitCode.UNSUPPORTED
+    assert "did you mean 'fanuc'" in capsys.readouterr().err
