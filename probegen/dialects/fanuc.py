@@ -7,8 +7,8 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
   the probe tool and its length offset: the program relies on no state it did not set.
 * ``RAPID`` moves are G0, used only at the clearance plane or straight up to it.
 * ``PROTECTED`` moves are G31 at the positioning feed; if the skip signal fires the skip
-  position differs from the end point, and the program prints ``ERR COLLISION`` and stops
-  with macro alarm 3002.
+  position differs from the end point, and the program prints ``ERR COLLISION <feature>
+  <move>`` and stops with macro alarm 3002.
 * Touches are G31 at the probing feed from the approach point to ``overtravel`` past the
   nominal contact; if the skip position equals the end point the probe never triggered,
   and the program prints ``ERR NOTOUCH`` and stops with macro alarm 3001.
@@ -94,7 +94,10 @@ class Fanuc(Dialect):
         s = program.setup
         self.base = s.variable_base
         self.setup = s
-        blocks = [self.block(node) for node in ir.walk(program.body)]
+        nodes = ir.walk(program.body)
+        self.owners = _owners(nodes)
+        self.moves: dict[str, int] = {}
+        blocks = [self.block(node) for node in nodes]
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
             "ball": self.length(s.ball_diameter),
@@ -111,7 +114,7 @@ class Fanuc(Dialect):
             return {"kind": "comment",
                     "text": f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}"}
         if isinstance(node, ir.Move):
-            return self.move(node)
+            return self.move(node, self.owners[id(node)])
         if isinstance(node, ir.Touch):
             return self.touch(node)
         if isinstance(node, ir.Assign):
@@ -133,13 +136,15 @@ class Fanuc(Dialect):
         """Assignments of a target point to the three scratch variables."""
         return [f"{self.scratch(k)}={self.expr(c)}" for k, c in enumerate(p)]
 
-    def move(self, node: ir.Move) -> dict[str, Any]:
+    def move(self, node: ir.Move, feature: str) -> dict[str, Any]:
         xyz = [self.addr(c) for c in node.target]
         if node.mode is ir.MoveMode.RAPID:
             return {"kind": "rapid", "xyz": xyz}
         if node.mode is ir.MoveMode.RETRACT:
             return {"kind": "retract", "xyz": xyz, "f": self.feed(self.setup.position_feed)}
+        self.moves[feature] = self.moves.get(feature, 0) + 1
         return {"kind": "protected", "set": self.targets(node.target),
+                "feature": feature, "index": self.moves[feature],
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.position_feed),
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label()}
 
@@ -162,3 +167,24 @@ class Fanuc(Dialect):
             value = self.expr(node.a + node.offset if isinstance(node.a, ir.Var)
                               else node.a + node.offset)
         return {"kind": "assign", "var": self.var(node.name), "value": value}
+
+
+def _owners(nodes: list[ir.Node]) -> dict[int, str]:
+    """For each node (by id), the feature it serves: that of the next touch, else the last.
+
+    A protected move that stops on an unexpected trigger prints this feature and the
+    move's number within it (``ERR COLLISION SPH1 3``).
+    """
+    out: dict[int, str] = {}
+    feature = ""
+    for node in reversed(nodes):
+        if isinstance(node, ir.Touch):
+            feature = node.feature
+        out[id(node)] = feature
+    last = ""
+    for node in nodes:
+        if isinstance(node, ir.Touch):
+            last = node.feature
+        if not out[id(node)]:
+            out[id(node)] = last or "NONE"
+    return out
