@@ -1,7 +1,8 @@
 """The thin command line.  User errors print one message and exit non-zero; no traceback.
 
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
-collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 64 usage.
+collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
+tolerance, 9 capture ended without the end marker, 64 usage.
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ class ExitCode(IntEnum):
     UNSUPPORTED = 5
     PARSE = 6
     CALIBRATION = 7
+    NOT_OK = 8
+    CAPTURE_INCOMPLETE = 9
     USAGE = 64
 
 
@@ -101,6 +104,50 @@ def _sphere_points(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
+def _ingest(args: argparse.Namespace) -> int:
+    from probegen.compensate import calibration_toml, load_calibration
+    from probegen.ingest import ingest, to_table, write_outputs
+    from probegen.spec import load_spec
+
+    spec = load_spec(args.spec)
+    cal = load_calibration(args.calibration) if args.calibration else None
+    result = ingest(args.log, spec, calibration=cal)
+    js, cs = write_outputs(result, Path(args.output))
+    sys.stdout.write(to_table(result))
+    for note in result.notes:
+        print(f"note: {note}")
+    for diag in result.log.diagnostics:
+        print(f"diagnostic: {diag}")
+    print(f"wrote {js} and {cs}")
+    if args.write_calibration:
+        target = Path(args.write_calibration)
+        target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
+                          encoding="utf-8", newline="\n")
+        print(f"wrote the probe calibration {target}")
+    failed = any(r.ok is False for r in result.results)
+    return ExitCode.NOT_OK if failed else ExitCode.OK
+
+
+_PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
+
+
+def _capture(args: argparse.Namespace) -> int:
+    from probegen.results.capture import capture
+
+    print(f"capturing from {args.port} into {args.out} ({args.baud} baud, {args.bits}"
+          f"{args.parity}{args.stop_bits:g}, xon/xoff {'on' if args.xonxoff else 'off'}); "
+          "start the program now, Ctrl-C stops", file=sys.stderr)
+    res = capture(args.port, args.out, baudrate=args.baud, bytesize=args.bits,
+                  parity=_PARITY[args.parity], stopbits=args.stop_bits,
+                  xonxoff=args.xonxoff, timeout_s=args.timeout, append=args.append)
+    why = {"end-marker": "the program's end marker arrived",
+           "timeout": f"nothing arrived for {args.timeout:g} s",
+           "interrupted": "stopped by the user",
+           "disconnected": f"the port went away ({res.detail})"}[res.reason]
+    print(f"capture ended: {why}; {res.bytes} bytes kept in {res.path}")
+    return ExitCode.OK if res.reason == "end-marker" else ExitCode.CAPTURE_INCOMPLETE
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
     parser = argparse.ArgumentParser(
@@ -127,6 +174,32 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-polar-angle", type=float, default=90.0,
                    help="largest polar angle in degrees (cap only)")
     s.set_defaults(func=_sphere_points)
+
+    i = sub.add_parser("ingest", help="evaluate a returned log (DPRNT) against a spec")
+    i.add_argument("log", help="the raw log as captured")
+    i.add_argument("--spec", required=True, help="the spec the program was compiled from")
+    i.add_argument("-o", "--output", default="out",
+                   help="folder for results.json and results.csv (default: out/)")
+    i.add_argument("--calibration", help="probe calibration file to compensate with")
+    i.add_argument("--write-calibration", metavar="FILE",
+                   help="write the probe calibration a sphere test measured")
+    i.set_defaults(func=_ingest)
+
+    cp = sub.add_parser("capture", help="record what the machine sends on a serial port")
+    cp.add_argument("--port", required=True,
+                    help="serial device (/dev/ttyUSB0, COM3) or a pyserial URL")
+    cp.add_argument("--out", required=True, help="raw log file (never overwritten)")
+    cp.add_argument("--baud", type=int, default=9600, help="baud rate (default 9600)")
+    cp.add_argument("--bits", type=int, choices=(7, 8), default=7, help="data bits (7)")
+    cp.add_argument("--parity", choices=sorted(_PARITY), default="E", help="parity (E)")
+    cp.add_argument("--stop-bits", type=float, choices=(1, 1.5, 2), default=2,
+                    help="stop bits (2)")
+    cp.add_argument("--xonxoff", action=argparse.BooleanOptionalAction, default=True,
+                    help="software flow control (on)")
+    cp.add_argument("--timeout", type=float, default=60.0,
+                    help="stop after this many idle seconds (60)")
+    cp.add_argument("--append", action="store_true", help="append to an existing log")
+    cp.set_defaults(func=_capture)
     return parser
 
 

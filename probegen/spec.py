@@ -26,6 +26,7 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     retract = 5.0                  # optional; must be >= the safe minimum (M1)
     locate = true                  # find the real centre first (machine tools)
     locate_uncertainty = 2.0       # how far the real centre may be from nominal
+    tolerance = { form = 0.004, size = 0.004, position = 0.05 }   # optional limits, mm
 
 Every problem is a ``SpecError`` naming the file, the key path and the value found.
 """
@@ -51,6 +52,21 @@ _ID = re.compile(r"[A-Z][A-Z0-9]{0,11}\Z")
 
 
 @dataclass(frozen=True, slots=True)
+class SphereTolerance:
+    """Limits for the sphere test (ISO 10360-5 style MPEs), mm; None = not checked.
+
+    Attributes:
+        form: limit of the probing form error P_FTU (range of radial residuals).
+        size: limit of |P_STU|, the fitted diameter's deviation from the calibrated one.
+        position: limit of the fitted centre's distance from the nominal centre.
+    """
+
+    form: float | None = None
+    size: float | None = None
+    position: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class SphereTest:
     """A 25-point (or n-point) probing test on a reference sphere (method M1).
 
@@ -67,6 +83,7 @@ class SphereTest:
         retract: user retract distance (mm), or None for the safe minimum plus margin.
         locate: whether the program first finds the real centre.
         locate_uncertainty: how far the real centre may be from nominal (mm).
+        tolerance: limits for pass/fail.
     """
 
     id: str
@@ -81,6 +98,7 @@ class SphereTest:
     retract: float | None
     locate: bool
     locate_uncertainty: float
+    tolerance: SphereTolerance = SphereTolerance()
 
 
 Feature = SphereTest
@@ -215,4 +233,11 @@ def _sphere_test(t: Table, fid: str, k: float) -> SphereTest:
         diameter=None if diameter is None else diameter * k, layout=layout, points=points,
         max_polar_angle=polar, retract=None if retract is None else retract * k,
         locate=t.get_bool("locate", True), locate_uncertainty=uncertainty * k,
+        tolerance=_sphere_tolerance(t.table("tolerance"), k),
     )
+
+
+def _sphere_tolerance(t: Table, k: float) -> SphereTolerance:
+    values = {key: t.get_float(key, positive=True) for key in ("form", "size", "position")}
+    t.done()
+    return SphereTolerance(**{key: None if v is None else v * k for key, v in values.items()})

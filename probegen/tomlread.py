@@ -77,6 +77,10 @@ class Table:
             return default
         return self.data[key]
 
+    def get_any(self, key: str, default: Any = None) -> Any:
+        """The raw value (the caller checks it), or ``default`` when absent."""
+        return self._raw(key, default, False)
+
     def get_str(self, key: str, default: str | None = None, *, required: bool = False,
                 choices: Sequence[str] | None = None) -> str | None:
         """A string, optionally one of ``choices``."""

@@ -1,0 +1,150 @@
+"""Fitted features against their nominals: deviations, form, pass/fail.
+
+The sphere test (method M1, ISO 10360-5): a least-squares (Gaussian) sphere through the
+compensated contact points; radial residuals ``r_i = |P_i − C| − R``; probing form error
+``P_FTU = max r_i − min r_i``; size error ``P_STU = D_fit − D_cal``.  When the points were
+compensated with the nominal ball radius ``r``, the probe's effective radius is
+``r_eff = r + R_fit − R_cal`` (a smaller effective radius, from pre-travel, makes the
+sphere look smaller), and the effective radius in each measured direction is
+``r + |P_i − C| − R_cal``: that is the probe calibration the test produces.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from probegen.compensate import ProbeCalibration
+from probegen.geometry.fits import SphereFit, fit_sphere
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class Characteristic:
+    """One checked quantity of a feature.
+
+    Attributes:
+        name: e.g. ``X``, ``D``, ``P_FTU``.
+        measured: the measured value, mm.
+        nominal: the nominal value, mm.
+        deviation: measured − nominal, mm.
+        lower: lowest allowed deviation, or None when not toleranced.
+        upper: highest allowed deviation, or None.
+    """
+
+    name: str
+    measured: float
+    nominal: float
+    deviation: float
+    lower: float | None = None
+    upper: float | None = None
+
+    @property
+    def ok(self) -> bool | None:
+        """Within tolerance (None when not toleranced)."""
+        if self.lower is None and self.upper is None:
+            return None
+        lo = -math.inf if self.lower is None else self.lower
+        hi = math.inf if self.upper is None else self.upper
+        return lo <= self.deviation <= hi
+
+
+@dataclass(frozen=True, slots=True)
+class SphereTestResult:
+    """The evaluated sphere test.
+
+    Attributes:
+        feature: feature id.
+        fit: the least-squares sphere.
+        points: (n) contact points used, mm.
+        directions: (n) nominal approach normals of the points.
+        nominal_centre: nominal (or located) centre, mm.
+        calibrated_diameter: the sphere's certified diameter, mm.
+        ball_radius: the radius the points were compensated with (nominal), mm.
+        p_ftu: probing form error, mm.
+        p_stu: probing size error, mm.
+        effective_radius: mean effective stylus radius, mm.
+        radii: effective radius in each direction, mm.
+        characteristics: the checked quantities.
+    """
+
+    feature: str
+    fit: SphereFit
+    points: tuple[Vec3, ...]
+    directions: tuple[Vec3, ...]
+    nominal_centre: Vec3
+    calibrated_diameter: float
+    ball_radius: float
+    p_ftu: float
+    p_stu: float
+    effective_radius: float
+    radii: tuple[float, ...]
+    characteristics: tuple[Characteristic, ...]
+
+    @property
+    def ok(self) -> bool | None:
+        """All toleranced characteristics within limits (None if none is toleranced)."""
+        checks = [c.ok for c in self.characteristics if c.ok is not None]
+        return all(checks) if checks else None
+
+    def calibration(self, source: str = "") -> ProbeCalibration:
+        """The probe calibration this test measured."""
+        return ProbeCalibration(self.ball_radius, self.effective_radius, self.directions,
+                                self.radii, source)
+
+
+def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,
+                         nominal_centre: Vec3, calibrated_diameter: float, ball_radius: float,
+                         form: float | None = None, size: float | None = None,
+                         position: float | None = None) -> SphereTestResult:
+    """Evaluate the sphere test from compensated contact points.
+
+    Args:
+        feature: feature id.
+        points: (n, 3) contact points, compensated with ``ball_radius``.
+        directions: (n, 3) the nominal approach normals of the points.
+        nominal_centre: the nominal centre, mm.
+        calibrated_diameter: certified diameter of the sphere, mm.
+        ball_radius: the radius used for compensation, mm.
+        form: limit of P_FTU, or None.
+        size: limit of |P_STU|, or None.
+        position: limit of the centre's distance from nominal, or None.
+
+    Returns:
+        The result with its characteristics.
+    """
+    p = np.asanyarray(points, dtype=np.float64)
+    fit = fit_sphere(p)
+    r_cal = calibrated_diameter / 2.0
+    radial = np.linalg.norm(p - np.asarray(fit.centre), axis=1)
+    p_ftu = float(radial.max() - radial.min())
+    p_stu = 2.0 * fit.radius - calibrated_diameter
+    dist = float(np.linalg.norm(np.asarray(fit.centre) - np.asarray(nominal_centre)))
+    chars = [Characteristic(axis, c, n, c - n) for axis, c, n in
+             zip("XYZ", fit.centre, nominal_centre, strict=True)]
+    chars += [
+        Characteristic("POS", dist, 0.0, dist, None, position),
+        Characteristic("D", 2.0 * fit.radius, calibrated_diameter, p_stu,
+                       None if size is None else -size, size),
+        Characteristic("P_FTU", p_ftu, 0.0, p_ftu, None, form),
+        Characteristic("P_STU", p_stu, 0.0, p_stu, None if size is None else -size, size),
+        Characteristic("R_EFF", ball_radius + fit.radius - r_cal, ball_radius,
+                       fit.radius - r_cal),
+    ]
+    return SphereTestResult(
+        feature=feature, fit=fit, points=_tuples(p), directions=_tuples(directions),
+        nominal_centre=nominal_centre, calibrated_diameter=calibrated_diameter,
+        ball_radius=ball_radius, p_ftu=p_ftu, p_stu=p_stu,
+        effective_radius=ball_radius + fit.radius - r_cal,
+        radii=tuple(float(x) for x in ball_radius + radial - r_cal),
+        characteristics=tuple(chars),
+    )
+
+
+def _tuples(a: ArrayLike) -> tuple[Vec3, ...]:
+    arr = np.asanyarray(a, dtype=np.float64).reshape(-1, 3)
+    return tuple((float(x), float(y), float(z)) for x, y, z in arr)

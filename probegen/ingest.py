@@ -1,0 +1,187 @@
+"""From what the machine returned to evaluated features: ``probegen ingest``.
+
+Reads a DPRNT log (as captured: the raw bytes on disk are never rewritten), matches each
+measuring touch to its planned point by feature id and point index, compensates the ball
+centres along the planned normals, fits and evaluates each feature, and writes
+``results.json`` and ``results.csv``.
+
+Matching: the spec is planned again (points and order only, no program), so touch ``k``
+of feature ``F`` is the plan's ``k``-th point of ``F``; a resumed program's repeated
+touches count once, the last one read.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from probegen.compensate import ProbeCalibration, compensate
+from probegen.errors import ProbegenError
+from probegen.evaluate import SphereTestResult, evaluate_sphere_test
+from probegen.results import DprntLog, read_dprnt
+from probegen.spec import Spec
+
+MIN_POINTS = 5
+"""Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Ingested:
+    """Everything ``ingest`` found.
+
+    Attributes:
+        source: the log file.
+        log: the parsed log (with its diagnostics).
+        results: one evaluated result per spec feature that has touches.
+        notes: problems found while matching (missing touches, alarms in the log).
+    """
+
+    source: str
+    log: DprntLog
+    results: tuple[SphereTestResult, ...]
+    notes: tuple[str, ...]
+
+
+def ingest(log_path: str | Path, spec: Spec, *,
+           calibration: ProbeCalibration | None = None) -> Ingested:
+    """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for."""
+    from probegen.planning.sphere_test import plan_points, resolve_sphere
+
+    log = read_dprnt(log_path)
+    notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
+             for e in log.errors]
+    if not log.complete:
+        notes.append("the log has no PGEND line: the program did not finish")
+    touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
+    results = []
+    for feature in spec.features:
+        sphere = resolve_sphere(feature, spec.model)
+        plan = plan_points(feature, sphere, spec.machine)
+        found = [k for k in range(1, len(plan.directions) + 1) if (feature.id, k) in touches]
+        missing = sorted(set(range(1, len(plan.directions) + 1)) - set(found))
+        if missing:
+            notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+        if len(found) < MIN_POINTS:
+            notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "
+                         f"(at least {MIN_POINTS} needed)")
+            continue
+        centres = np.array([touches[(feature.id, k)] for k in found])
+        normals = np.array([plan.directions[k - 1] for k in found])
+        r = spec.machine.probe.ball_radius if calibration is None else calibration
+        points = compensate(centres, normals, r)
+        tol = feature.tolerance
+        results.append(evaluate_sphere_test(
+            feature.id, points, normals, nominal_centre=sphere.centre,
+            calibrated_diameter=sphere.diameter,
+            ball_radius=r if isinstance(r, float) else r.effective_radius,
+            form=tol.form, size=tol.size, position=tol.position))
+    if not results:
+        raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
+                            f"spec's features, found none usable; " + "; ".join(notes))
+    return Ingested(str(log_path), log, tuple(results), tuple(notes))
+
+
+def _ranges(numbers: list[int]) -> str:
+    out: list[str] = []
+    for n in numbers:
+        if out and out[-1].split("-")[-1] == str(n - 1):
+            out[-1] = out[-1].split("-")[0] + f"-{n}"
+        else:
+            out.append(str(n))
+    return ", ".join(out)
+
+
+def _f(x: float) -> float:
+    return float(f"{x:.7f}") + 0.0
+
+
+def to_json(ing: Ingested) -> str:
+    """``results.json``: repeatable text (fixed rounding to 1e-7 mm)."""
+    doc: dict[str, Any] = {
+        "source": ing.source,
+        "program": ing.log.program,
+        "complete": ing.log.complete,
+        "notes": list(ing.notes),
+        "diagnostics": [str(d) for d in ing.log.diagnostics],
+        "features": [_feature_json(r) for r in ing.results],
+    }
+    return json.dumps(doc, indent=2) + "\n"
+
+
+def _feature_json(r: SphereTestResult) -> dict[str, Any]:
+    return {
+        "id": r.feature,
+        "kind": "sphere_test",
+        "ok": r.ok,
+        "n": len(r.points),
+        "centre": [_f(v) for v in r.fit.centre],
+        "diameter": _f(2.0 * r.fit.radius),
+        "p_ftu": _f(r.p_ftu),
+        "p_stu": _f(r.p_stu),
+        "effective_radius": _f(r.effective_radius),
+        "characteristics": [
+            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
+             "deviation": _f(c.deviation),
+             "lower": None if c.lower is None else _f(c.lower),
+             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
+            for c in r.characteristics
+        ],
+        "points": [[_f(v) for v in p] for p in r.points],
+        "directions": [[_f(v) for v in d] for d in r.directions],
+        "residuals": [_f(v) for v in r.fit.residuals],
+    }
+
+
+def _status(ok: bool | None) -> str:
+    return "-" if ok is None else ("OK" if ok else "NOT OK")
+
+
+def _tol(lo: float | None, hi: float | None) -> str:
+    if lo is None and hi is None:
+        return "-"
+    if lo is None:
+        return f"<= {hi:.4f}"
+    return f"{lo:+.4f}/{hi:+.4f}"
+
+
+def to_csv(ing: Ingested) -> str:
+    """``results.csv``: one row per characteristic."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
+                "upper", "status"])
+    for r in ing.results:
+        for c in r.characteristics:
+            w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
+                        f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
+                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok)])
+    return buf.getvalue()
+
+
+def to_table(ing: Ingested) -> str:
+    """The table ``probegen ingest`` prints."""
+    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status")]
+    for r in ing.results:
+        for c in r.characteristics:
+            rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
+                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
+                       for i, (cell, w) in enumerate(zip(row, widths, strict=True))).rstrip()
+             for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(ing: Ingested, out_dir: Path) -> tuple[Path, Path]:
+    """Write ``results.json`` and ``results.csv`` into ``out_dir``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    js, cs = out_dir / "results.json", out_dir / "results.csv"
+    js.write_text(to_json(ing), encoding="utf-8", newline="\n")
+    cs.write_text(to_csv(ing), encoding="utf-8", newline="\n")
+    return js, cs
