@@ -15,7 +15,9 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/probegen compile samples/sphere25/sphere_test.toml -d fanuc -d dmis -o out
 	$(BIN)/probegen sphere-points --layout octahedral
+	$(BIN)/probegen ingest samples/sphere25/sphere_test.log --spec samples/sphere25/sphere_test.toml -o out --write-calibration out/probe-calibration.toml
 	@echo "programs written under out/: out/sphere_test.nc (Fanuc Macro B), out/sphere_test.dmi (DMIS)"
+	@echo "results of the sample log under out/: results.json, results.csv, probe-calibration.toml"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
