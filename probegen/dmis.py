@@ -22,7 +22,8 @@ Parameters (:data:`Param`) are plain values where possible:
   ``V1[2]``, operands ``(base, *indices)``).  Unary ``-`` and ``.NOT.`` have one operand.
 
 :func:`format_statement` writes a statement back as canonical DMIS text that parses to
-the same statement.
+the same statement.  :func:`parse_dmis_recovering` parses statement by statement, so a
+bad statement becomes a diagnostic and the others are kept (reading DMIS output files).
 """
 
 from __future__ import annotations
@@ -312,6 +313,70 @@ def read_dmis(path: str | Path) -> DmisFile:
     except OSError as exc:
         raise ProgramParseError(f"{source}: cannot read: {exc.strerror}") from None
     return parse_dmis(_decode(data, source), source=source)
+
+
+def parse_dmis_recovering(
+    text: str, *, source: str = "<string>"
+) -> tuple[DmisFile, tuple[Diagnostic, ...]]:
+    """Parse DMIS text, keeping every statement that parses and reporting the others.
+
+    A file that parses whole is returned as :func:`parse_dmis` returns it.  Otherwise
+    the text is cut into logical statements (physical lines joined by a ``$`` at the end
+    of a line; a line with a ``$$`` comment never continues, as in the grammar) and
+    each is parsed alone: a bad statement costs only itself.
+
+    Args:
+        text: the whole file; CRLF, LF or CR line ends; a leading BOM is ignored.
+        source: the file name used in diagnostics.
+
+    Returns:
+        The good statements and comments with physical line numbers, and one
+        diagnostic (line, column, expected, found, caret) per bad statement.
+    """
+    try:
+        return parse_dmis(text, source=source), ()
+    except ProgramParseError:
+        pass
+    statements: list[Statement] = []
+    comments: list[tuple[int, str]] = []
+    diagnostics: list[Diagnostic] = []
+    for first, chunk in logical_statements(text):
+        shift = first - 1
+        try:
+            part = parse_dmis(chunk, source=source)
+        except ProgramParseError as exc:
+            diagnostics.extend(replace(d, line=d.line + shift) for d in exc.diagnostics)
+            continue
+        statements.extend(replace(s, line=s.line + shift) for s in part.statements)
+        comments.extend((line + shift, comment) for line, comment in part.comments)
+    return DmisFile(source, tuple(statements), tuple(comments)), tuple(diagnostics)
+
+
+def logical_statements(text: str) -> list[tuple[int, str]]:
+    """Cut DMIS text into logical statements: ``(first physical line, text)`` pairs.
+
+    Physical lines are joined while a line ends with ``$`` (blanks after it allowed)
+    outside quotes and has no ``$$`` comment.  Every physical line belongs to exactly
+    one pair, so line numbers stay physical.
+    """
+    lines = _LONE_CR.sub("\n", text.removeprefix("\ufeff")).split("\n")
+    out: list[tuple[int, str]] = []
+    start = 0
+    for index, line in enumerate(lines):
+        if index + 1 < len(lines) and _continues(line):
+            continue
+        out.append((start + 1, "\n".join(lines[start : index + 1])))
+        start = index + 1
+    return out
+
+
+_QUOTED = re.compile(r"'(?:[^'\r\n]|'')*'")
+
+
+def _continues(line: str) -> bool:
+    """Return True if a physical line continues on the next (``$`` last, no comment)."""
+    code = _QUOTED.sub("''", line)
+    return "$$" not in code and code.rstrip(" \t\r").endswith("$")
 
 
 MAX_DEPTH = 100

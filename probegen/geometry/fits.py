@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry.fits_conditioning import assess_model, assess_plane, line_condition
 from probegen.geometry.fits_initial import algebraic_circle, algebraic_sphere
 from probegen.geometry.fits_results import (
     Circle2dFit,
@@ -41,13 +42,17 @@ from probegen.geometry.fits_solver import (
     as_points,
     canonical,
     check_finite,
+    columns,
     fit_error,
     guarded,
+    inverse,
+    jacobian_at,
     normalise,
-    refine,
+    norms,
+    polish,
     require_rank,
-    safe_ratio,
     step_tolerance,
+    subsample,
     summary,
     vec2,
     vec3,
@@ -97,7 +102,7 @@ def fit_line_2d(points: ArrayLike) -> Line2dFit:
     normal = np.array([-direction[1], direction[0]])
     residuals, rms, form = summary("2-D line", data.points @ normal * data.scale)
     return Line2dFit(vec2(data.centre), vec2(direction), vec2(normal),
-                     residuals, rms, form, len(residuals))
+                     residuals, rms, form, len(residuals), line_condition(data))
 
 
 @guarded("3-D line")
@@ -121,14 +126,17 @@ def fit_line_3d(points: ArrayLike) -> Line3dFit:
     residuals, rms, _ = summary("3-D line", dist)
     form = 2.0 * float(np.max(dist))
     check_finite("3-D line", form)
-    return Line3dFit(vec3(data.centre), vec3(direction), residuals, rms, form, len(residuals))
+    return Line3dFit(vec3(data.centre), vec3(direction), residuals, rms, form, len(residuals),
+                     line_condition(data))
 
 
-def _plane(points: ArrayLike, fit: str) -> tuple[Normalised, FloatArray]:
-    """Normalised points (at least 3, not collinear) and their unit plane normal."""
+def _plane(points: ArrayLike, fit: str) -> tuple[Normalised, FloatArray, float]:
+    """Normalised points (at least 3, not collinear), their unit plane normal and the
+    plane's condition number."""
     data = normalise(as_points(points, fit=fit, dim=3, minimum=3), fit=fit)
     require_rank(data, 2, fit=fit, expected="at least 3 points not all collinear")
-    return data, canonical(data.directions[2])
+    normal = canonical(data.directions[2])
+    return data, normal, assess_plane(fit, data, normal, data.points @ normal)
 
 
 @guarded("plane")
@@ -145,9 +153,10 @@ def fit_plane(points: ArrayLike) -> PlaneFit:
     Raises:
         ProbegenError: too few, non-finite or collinear points.
     """
-    data, normal = _plane(points, "plane")
+    data, normal, condition = _plane(points, "plane")
     residuals, rms, form = summary("plane", data.points @ normal * data.scale)
-    return PlaneFit(vec3(data.centre), vec3(normal), residuals, rms, form, len(residuals))
+    return PlaneFit(vec3(data.centre), vec3(normal), residuals, rms, form, len(residuals),
+                    condition)
 
 
 # -------------------------------------------------------------------- iterative
@@ -158,37 +167,41 @@ def _circle_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
 
 
 def _circle_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
-    rho = np.hypot(q[:, 0], q[:, 1])
-    return np.column_stack([-safe_ratio(q[:, 0], rho), -safe_ratio(q[:, 1], rho),
-                            -np.ones(len(q))])
+    inv = inverse(np.hypot(q[:, 0], q[:, 1]))
+    return columns(len(q), -q[:, 0] * inv, -q[:, 1] * inv, -1.0)
 
 
 def _sphere_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
-    return np.asarray(np.sqrt(np.sum(q * q, axis=1)) - shape[0])
+    return np.asarray(norms(q) - shape[0])
 
 
 def _sphere_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
-    dist = np.sqrt(np.sum(q * q, axis=1))
-    return np.column_stack([-safe_ratio(q, dist[:, None]), -np.ones(len(q))])
+    inv = inverse(norms(q))
+    return columns(len(q), -q[:, 0] * inv, -q[:, 1] * inv, -q[:, 2] * inv, -1.0)
 
 
 CIRCLE = Model("circle", (0, 1), _circle_residuals, _circle_jacobian)
 SPHERE = Model("sphere", (0, 1, 2), _sphere_residuals, _sphere_jacobian)
 
 
-def _circle(xy: FloatArray, data: Normalised, fit: str) -> tuple[FloatArray, float, FloatArray]:
+def _circle(xy: FloatArray, data: Normalised,
+            fit: str) -> tuple[FloatArray, float, FloatArray, float]:
     """Fit a circle to normalised in-plane points ``xy : (n, 2)``.
 
     Returns:
-        ``(centre (2,), radius, residuals (n,))`` in normalised units.
+        ``(centre (2,), radius, residuals (n,))`` in normalised units, and the condition
+        number.
     """
-    start = algebraic_circle(xy)
+    flat = np.column_stack([xy, np.zeros(len(xy))])
+    sample = subsample(flat)
+    start = algebraic_circle(sample[:, :2])
     if start is None:
         raise fit_error(fit, "points on a circle", "no algebraic circle through them")
-    flat = np.column_stack([xy, np.zeros(len(xy))])
-    pose = Pose(np.append(start[0], 0.0), np.eye(3))
-    sol = refine(CIRCLE, flat, pose, np.array([start[1]]), step_tol=step_tolerance(data))
-    return sol.pose.origin[:2], float(sol.shape[0]), sol.residuals
+    pose, shape = Pose(np.append(start[0], 0.0), np.eye(3)), np.array([start[1]])
+    sol = polish(CIRCLE, flat, sample, pose, shape, step_tol=step_tolerance(data))
+    jac = jacobian_at(CIRCLE, flat, sol)
+    condition = assess_model(fit, CIRCLE, jac, sol.residuals, data)
+    return sol.pose.origin[:2], float(sol.shape[0]), sol.residuals, condition
 
 
 @guarded("2-D circle")
@@ -207,11 +220,11 @@ def fit_circle_2d(points: ArrayLike) -> Circle2dFit:
     fit = "2-D circle"
     data = normalise(as_points(points, fit=fit, dim=2, minimum=3), fit=fit)
     require_rank(data, 2, fit=fit, expected="at least 3 points not all collinear")
-    centre, radius, res = _circle(data.points, data, fit)
+    centre, radius, res, condition = _circle(data.points, data, fit)
     world, radius = data.to_world(centre), radius * data.scale
     check_finite(fit, world, radius)
     residuals, rms, form = summary(fit, res * data.scale)
-    return Circle2dFit(vec2(world), radius, residuals, rms, form, len(residuals))
+    return Circle2dFit(vec2(world), radius, residuals, rms, form, len(residuals), condition)
 
 
 @guarded("3-D circle")
@@ -230,13 +243,14 @@ def fit_circle_3d(points: ArrayLike) -> Circle3dFit:
         ProbegenError: too few, non-finite or collinear points.
     """
     fit = "3-D circle"
-    data, normal = _plane(points, fit)
+    data, normal, flatness = _plane(points, fit)
     basis = orthonormal_basis(normal)[:2]
-    centre, radius, res = _circle(data.points @ basis.T, data, fit)
+    centre, radius, res, roundness = _circle(data.points @ basis.T, data, fit)
     world, radius = data.to_world(centre @ basis), radius * data.scale
     check_finite(fit, world, radius)
     residuals, rms, form = summary(fit, res * data.scale)
-    return Circle3dFit(vec3(world), vec3(normal), radius, residuals, rms, form, len(residuals))
+    return Circle3dFit(vec3(world), vec3(normal), radius, residuals, rms, form, len(residuals),
+                       max(flatness, roundness))
 
 
 @guarded("sphere")
@@ -254,12 +268,15 @@ def fit_sphere(points: ArrayLike) -> SphereFit:
     """
     data = normalise(as_points(points, fit="sphere", dim=3, minimum=4), fit="sphere")
     require_rank(data, 3, fit="sphere", expected="at least 4 points not all coplanar")
-    start = algebraic_sphere(data.points)
+    sample = subsample(data.points)
+    start = algebraic_sphere(sample)
     if start is None:
         raise fit_error("sphere", "points on a sphere", "no algebraic sphere through them")
-    pose = Pose(start[0], np.eye(3))
-    sol = refine(SPHERE, data.points, pose, np.array([start[1]]), step_tol=step_tolerance(data))
+    pose, shape = Pose(start[0], np.eye(3)), np.array([start[1]])
+    sol = polish(SPHERE, data.points, sample, pose, shape, step_tol=step_tolerance(data))
     centre, radius = data.to_world(sol.pose.origin), float(sol.shape[0]) * data.scale
     check_finite("sphere", centre, radius)
+    jac = jacobian_at(SPHERE, data.points, sol)
+    condition = assess_model("sphere", SPHERE, jac, sol.residuals, data)
     residuals, rms, form = summary("sphere", sol.residuals * data.scale)
-    return SphereFit(vec3(centre), radius, residuals, rms, form, len(residuals))
+    return SphereFit(vec3(centre), radius, residuals, rms, form, len(residuals), condition)

@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from probegen.geometry.fits_conditioning import assess_model
 from probegen.geometry.fits_initial import (
     algebraic_circle,
     algebraic_cone,
@@ -35,13 +36,16 @@ from probegen.geometry.fits_solver import (
     as_points,
     canonical,
     check_finite,
+    columns,
     fit_error,
     guarded,
+    inverse,
+    jacobian_at,
     multi_start,
     normalise,
     require_rank,
-    safe_ratio,
     step_tolerance,
+    subsample,
     summary,
     vec3,
 )
@@ -53,7 +57,8 @@ from probegen.geometry.frames import rotation_to_z
 def _polar(q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Return ``(rho, x / rho, y / rho)`` for local points ``q : (n, 3)``."""
     rho = np.hypot(q[:, 0], q[:, 1])
-    return rho, safe_ratio(q[:, 0], rho), safe_ratio(q[:, 1], rho)
+    inv = inverse(rho)
+    return rho, q[:, 0] * inv, q[:, 1] * inv
 
 
 def _cylinder_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
@@ -63,7 +68,7 @@ def _cylinder_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
 def _cylinder_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
     _, ux, uy = _polar(q)
     z = q[:, 2]
-    return np.column_stack([-ux, -uy, -ux * z, -uy * z, -np.ones(len(q))])
+    return columns(len(q), -ux, -uy, -ux * z, -uy * z, -1.0)
 
 
 def _cone_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
@@ -75,8 +80,8 @@ def _cone_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
     rho, ux, uy = _polar(q)
     x, y, z = q.T
     c, s = math.cos(shape[0]), math.sin(shape[0])
-    return np.column_stack([-ux * c, -uy * c, -ux * z * c - x * s, -uy * z * c - y * s,
-                            -rho * s - z * c, -np.ones(len(q))])
+    return columns(len(q), -ux * c, -uy * c, -ux * z * c - x * s, -uy * z * c - y * s,
+                   -rho * s - z * c, -1.0)
 
 
 def _torus_residuals(q: FloatArray, shape: FloatArray) -> FloatArray:
@@ -88,15 +93,17 @@ def _torus_jacobian(q: FloatArray, shape: FloatArray) -> FloatArray:
     rho, ux, uy = _polar(q)
     x, y, z = q.T
     u = rho - shape[0]
-    w = np.hypot(u, z)
-    cu, cz = safe_ratio(u, w), safe_ratio(z, w)
-    return np.column_stack([-cu * ux, -cu * uy, -cz, cz * x - cu * ux * z,
-                            cz * y - cu * uy * z, -cu, -np.ones(len(q))])
+    inv = inverse(np.hypot(u, z))
+    cu, cz = u * inv, z * inv
+    return columns(len(q), -cu * ux, -cu * uy, -cz, cz * x - cu * ux * z,
+                   cz * y - cu * uy * z, -cu, -1.0)
 
 
 CYLINDER = Model("cylinder", (0, 1, 3, 4), _cylinder_residuals, _cylinder_jacobian)
-CONE = Model("cone", (0, 1, 3, 4), _cone_residuals, _cone_jacobian)
-TORUS = Model("torus", (0, 1, 2, 3, 4), _torus_residuals, _torus_jacobian)
+CONE = Model("cone", (0, 1, 3, 4), _cone_residuals, _cone_jacobian,
+             ("half angle", "distance to the surface"), ("half angle",))
+TORUS = Model("torus", (0, 1, 2, 3, 4), _torus_residuals, _torus_jacobian,
+              ("major radius", "minor radius"))
 
 # ---------------------------------------------------------------- starting guesses
 
@@ -144,8 +151,8 @@ Start = Callable[[FloatArray, FloatArray], tuple[Pose, FloatArray] | None]
 
 def _solve(model: Model, data: Normalised, start: Start) -> Solution:
     """Refine from every candidate axis and keep the best solution."""
-    q = data.points
-    starts = [start(q, axis) for axis in candidate_axes(q, data.directions)]
+    q, sample = data.points, subsample(data.points)
+    starts = [start(sample, axis) for axis in candidate_axes(sample, data.directions)]
     usable = [s for s in starts if s is not None]
     return multi_start(model, q, usable, step_tol=step_tolerance(data))
 
@@ -155,6 +162,34 @@ def _prepare(points: ArrayLike, fit: str, minimum: int) -> Normalised:
     data = normalise(as_points(points, fit=fit, dim=3, minimum=minimum), fit=fit)
     require_rank(data, 2, fit=fit, expected=f"at least {minimum} points not all collinear")
     return data
+
+
+def _assess(fit: str, model: Model, data: Normalised, sol: Solution) -> float:
+    """The solution's condition number, or ProbegenError if the points leave it open."""
+    jac = jacobian_at(model, data.points, sol)
+    if model is TORUS:
+        return assess_model(fit, model, jac, sol.residuals, data)
+    jac = pivot_at_centroid(jac, sol, with_cone=model is CONE)
+    return assess_model(fit, model, jac, sol.residuals, data, sol.pose.axis)
+
+
+def pivot_at_centroid(jac: FloatArray, sol: Solution, *, with_cone: bool) -> FloatArray:
+    """Return the Jacobian of a cylinder (cone) solution for axis tilts about the point
+    of the axis nearest the data centroid instead of the solver's pivot ``sol.pose``.
+
+    The solver's pivot may lie anywhere along the axis, and the conditioning of tilts
+    depends on it; the centroid's projection makes it a property of the data.  Tilting
+    ``(a, b)`` about a pivot ``t`` further along the axis is the same tilt about the old
+    pivot and a shift ``(-a t, -b t)``; for a cone the distance to the surface also
+    changes by ``t sin(psi)``.  Columns: ``(dx, dy, a, b, shape...)``.
+    """
+    t = -float(sol.pose.origin @ sol.pose.axis)
+    out = np.array(jac, dtype=np.float64, order="F")
+    out[:, 2] -= t * out[:, 0]
+    out[:, 3] -= t * out[:, 1]
+    if with_cone:
+        out[:, 4] -= t * math.cos(float(sol.shape[0])) * out[:, 5]
+    return out
 
 
 def _axis_point(data: Normalised, pose: Pose) -> tuple[float, FloatArray]:
@@ -188,9 +223,10 @@ def fit_cylinder(points: ArrayLike) -> CylinderFit:
     check_finite("cylinder", point, radius)
     if not radius > 0.0:
         raise fit_error("cylinder", "points around an axis", f"radius {radius:g}")
+    condition = _assess("cylinder", CYLINDER, data, sol)
     residuals, rms, form = summary("cylinder", sol.residuals * data.scale)
     return CylinderFit(vec3(point), vec3(canonical(sol.pose.axis)),
-                       radius, residuals, rms, form, len(residuals))
+                       radius, residuals, rms, form, len(residuals), condition)
 
 
 @guarded("cone")
@@ -218,9 +254,11 @@ def fit_cone(points: ArrayLike) -> ConeFit:
     check_finite("cone", point, psi, dist)
     if not psi < math.pi / 2 - 1e-9:
         raise fit_error("cone", "a half angle below 90 degrees", f"{math.degrees(psi):g}")
+    condition = _assess("cone", CONE, data, sol)
     residuals, rms, form = summary("cone", sol.residuals * data.scale)
     return ConeFit(vec3(point), vec3(axis), psi,
-                   dist * data.scale / math.cos(psi), residuals, rms, form, len(residuals))
+                   dist * data.scale / math.cos(psi), residuals, rms, form, len(residuals),
+                   condition)
 
 
 @guarded("torus")
@@ -244,6 +282,7 @@ def fit_torus(points: ArrayLike) -> TorusFit:
     check_finite("torus", centre, major, minor)
     if not minor > 0.0:
         raise fit_error("torus", "points around a tube", f"minor radius {minor:g}")
+    condition = _assess("torus", TORUS, data, sol)
     residuals, rms, form = summary("torus", sol.residuals * data.scale)
     return TorusFit(vec3(centre), vec3(canonical(sol.pose.axis)),
-                    major, minor, residuals, rms, form, len(residuals))
+                    major, minor, residuals, rms, form, len(residuals), condition)

@@ -12,6 +12,9 @@ Shared conventions (every record):
 * Directions are unit vectors.  Unless a record says otherwise the sign of a direction
   is normalised so that its component of largest absolute value is positive (the first
   such component on an exact tie).  The cone's axis instead points to increasing radius.
+* ``condition`` is the condition number of the fit's Jacobian at the solution on
+  normalised data (``probegen.geometry.fits_conditioning`` explains it and the limits
+  beyond which a fit is refused instead).
 * A point on an axis is the orthogonal projection of the data centroid onto the axis
   (the NIST Algorithm Testing System convention); for lines and planes it is the data
   centroid itself, which lies on the least-squares line or plane.
@@ -38,6 +41,8 @@ class Line2dFit:
         rms: root mean square residual.
         form: straightness, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     point: Vec2
@@ -47,6 +52,7 @@ class Line2dFit:
     rms: float
     form: float
     n: int
+    condition: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,6 +66,8 @@ class Line3dFit:
         rms: root mean square residual.
         form: straightness, ``2 * max`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     point: Vec3
@@ -68,6 +76,7 @@ class Line3dFit:
     rms: float
     form: float
     n: int
+    condition: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,6 +90,8 @@ class PlaneFit:
         rms: root mean square residual.
         form: flatness, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     point: Vec3
@@ -89,6 +100,7 @@ class PlaneFit:
     rms: float
     form: float
     n: int
+    condition: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +114,8 @@ class Circle2dFit:
         rms: root mean square residual.
         form: roundness, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     centre: Vec2
@@ -110,6 +124,7 @@ class Circle2dFit:
     rms: float
     form: float
     n: int
+    condition: float
 
     @property
     def diameter(self) -> float:
@@ -129,6 +144,8 @@ class Circle3dFit:
         rms: root mean square residual.
         form: roundness, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     centre: Vec3
@@ -138,6 +155,7 @@ class Circle3dFit:
     rms: float
     form: float
     n: int
+    condition: float
 
     @property
     def diameter(self) -> float:
@@ -156,6 +174,8 @@ class SphereFit:
         rms: root mean square residual.
         form: sphericity, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     centre: Vec3
@@ -164,6 +184,7 @@ class SphereFit:
     rms: float
     form: float
     n: int
+    condition: float
 
     @property
     def diameter(self) -> float:
@@ -183,6 +204,8 @@ class CylinderFit:
         rms: root mean square residual.
         form: cylindricity, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     point: Vec3
@@ -192,6 +215,7 @@ class CylinderFit:
     rms: float
     form: float
     n: int
+    condition: float
 
     @property
     def diameter(self) -> float:
@@ -213,6 +237,8 @@ class ConeFit:
         rms: root mean square residual.
         form: conicity, ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     point: Vec3
@@ -223,6 +249,7 @@ class ConeFit:
     rms: float
     form: float
     n: int
+    condition: float
 
     @property
     def apex_angle(self) -> float:
@@ -258,6 +285,8 @@ class TorusFit:
         rms: root mean square residual.
         form: ``max - min`` residual.
         n: number of points.
+        condition: how well the points determine the fit: the condition number of
+            its Jacobian on normalised data (``fits_conditioning``); 1 is ideal.
     """
 
     centre: Vec3
@@ -268,3 +297,4 @@ class TorusFit:
     rms: float
     form: float
     n: int
+    condition: float

@@ -59,6 +59,15 @@ SCOUT_ITERATIONS = 30
 #: optimum the true decrease is below the rounding of the sum (~n * 1e-16), and refusing
 #: such steps would stall Gauss-Newton short of full convergence.
 COST_SLACK = 1e-12
+#: Above this many points a solver step solves the normal equations ``J^T J`` (a few
+#: parameters) instead of a least-squares problem with one row per point: 15 times
+#: faster at a million points, and as accurate while the problem is well conditioned
+#: (the fits refuse a condition number above ``fits_conditioning.CONDITION_LIMIT``).
+NORMAL_EQUATIONS_FROM = 20_000
+#: Above this many points the starting guesses (and a multi-start's scouting) use a fixed
+#: pseudo-random subset of this size; the solution found there is then polished on all
+#: points.  Below it every point is used, exactly as before.
+SAMPLE_SIZE = 4096
 
 
 def fit_error(fit: str, expected: str, found: str) -> ProbegenError:
@@ -117,9 +126,10 @@ def as_points(points: ArrayLike, *, fit: str, dim: int, minimum: int) -> FloatAr
         raise fit_error(fit, f"an (n, {dim}) array of points", f"shape {arr.shape}")
     if arr.shape[0] < minimum:
         raise fit_error(fit, f"at least {minimum} points", f"{arr.shape[0]}")
-    bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
-    if bad.size:
-        raise fit_error(fit, "finite coordinates", f"{arr[bad[0]].tolist()} at row {bad[0]}")
+    if not math.isfinite(float(np.sum(arr))):  # a NaN or inf makes the sum non-finite
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad.size:
+            raise fit_error(fit, "finite coordinates", f"{arr[bad[0]].tolist()} at row {bad[0]}")
     return np.asarray(arr)
 
 
@@ -153,24 +163,45 @@ def normalise(points: FloatArray, *, fit: str) -> Normalised:
     Raises:
         ProbegenError: all points coincide, or the coordinates are too large to scale.
     """
-    big = float(np.max(np.abs(points)))
-    unit_points = points / big if big > 0.0 else points
-    mean = unit_points.mean(axis=0)
-    centred = unit_points - mean
-    spread = math.sqrt(float(np.mean(np.sum(centred * centred, axis=1))))
+    big = max(-float(np.min(points)), float(np.max(points)))
+    centred = points / big if big > 0.0 else points.copy()
+    mean = centred.mean(axis=0)
+    centred -= mean
+    spread = math.sqrt(float(np.einsum("ij,ij->", centred, centred)) / len(centred))
     if not spread > COINCIDENT:
         raise fit_error(fit, "points that are not all the same point", "coincident points")
     scale, centre = spread * big, mean * big
     if not (TINY <= scale < math.inf and np.all(np.isfinite(centre))):
         raise fit_error(fit, "a spread of points within the range of doubles",
                         f"a spread of {spread * big:g}")
-    q = centred / spread
-    _, sv, vt = np.linalg.svd(q, full_matrices=False)
+    q = centred
+    q /= spread
+    _, sv, vt = np.linalg.svd(_triangle(q), full_matrices=False)
     extents = np.zeros(points.shape[1])
     extents[: sv.size] = sv / math.sqrt(len(q))
     directions = np.eye(points.shape[1])
     directions[: vt.shape[0]] = vt
     return Normalised(q, centre, scale, extents, directions)
+
+
+def _triangle(q: FloatArray) -> FloatArray:
+    """Return a small matrix with the singular values and right singular vectors of
+    ``q : (n, dim)``: ``q`` itself when short, else the ``R`` of its QR factorisation
+    (orthogonal, so as accurate, and 3 times faster than an SVD of a million rows)."""
+    if len(q) <= 4 * q.shape[1]:
+        return q
+    return np.asarray(np.linalg.qr(q, mode="r"), dtype=np.float64)
+
+
+def subsample(points: FloatArray, size: int | None = None) -> FloatArray:
+    """Return ``points`` if there are at most ``size`` (default ``SAMPLE_SIZE``), else a
+    fixed pseudo-random subset of ``size`` rows (seeded, so a fit is repeatable; random,
+    so a grid of points does not alias)."""
+    size = SAMPLE_SIZE if size is None else size
+    if len(points) <= size:
+        return points
+    rows = np.random.default_rng(0).choice(len(points), size=size, replace=False)
+    return np.asarray(points[np.sort(rows)])
 
 
 def require_rank(data: Normalised, rank: int, *, fit: str, expected: str) -> None:
@@ -246,10 +277,16 @@ class Pose:
 
     def local(self, points: FloatArray) -> FloatArray:
         """Return ``points : (n, 3)`` in this frame, ``(n, 3)``."""
-        return np.asarray((points - self.origin) @ self.rot.T, dtype=np.float64)
+        # einsum: a (n, 3) @ (3, 3) product through BLAS is several times slower
+        local = np.einsum("ij,kj->ik", points, self.rot)
+        local -= self.rot @ self.origin
+        return np.asarray(local)
 
 
 LocalFn = Callable[[FloatArray, FloatArray], FloatArray]
+
+#: Names of the pose parameters ``(dx, dy, dz, a, b)`` in messages.
+POSE_NAMES = ("position", "position", "position", "axis direction", "axis direction")
 
 
 @dataclass(frozen=True, slots=True)
@@ -268,22 +305,52 @@ class Model:
     dofs: tuple[int, ...]
     residuals: LocalFn
     jacobian: LocalFn
+    shape_names: tuple[str, ...] = ("radius",)
+    angular: tuple[str, ...] = ()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of all solver parameters: the used pose parameters, then the shape's."""
+        return tuple(POSE_NAMES[d] for d in self.dofs) + self.shape_names
+
+    def is_angle(self, index: int) -> bool:
+        """True if parameter ``index`` (see ``names``) is an angle (radians)."""
+        if index < len(self.dofs):
+            return self.dofs[index] >= 3
+        return self.names[index] in self.angular
 
 
 @dataclass(frozen=True, slots=True)
 class Solution:
-    """Solver output in normalised units: pose, shape parameters, residuals, cost."""
+    """Solver output in normalised units: pose, shape parameters, residuals, cost, and
+    the Jacobian at the solution when the solver computed it there (else None)."""
 
     pose: Pose
     shape: FloatArray
     residuals: FloatArray
     cost: float
+    jacobian: FloatArray | None = None
 
 
-def safe_ratio(num: FloatArray, den: FloatArray) -> FloatArray:
-    """Return ``num / den`` with 0 where ``den`` is 0 (points on an axis)."""
-    ok = den > 0.0
-    return np.where(ok, num / np.where(ok, den, 1.0), 0.0)
+def inverse(values: FloatArray) -> FloatArray:
+    """Return ``1 / values`` for ``values >= 0``, with 0 where ``values`` is 0."""
+    if float(np.min(values, initial=1.0)) > 0.0:  # the usual case, twice as fast
+        return np.asarray(1.0 / values)
+    return np.divide(1.0, values, out=np.zeros_like(values), where=values > 0.0)
+
+
+def columns(n: int, *cols: FloatArray | float) -> FloatArray:
+    """Return the ``(n, k)`` matrix with columns ``cols`` (arrays ``(n,)`` or constants),
+    stored column by column: each column is one contiguous write."""
+    out = np.empty((n, len(cols)), order="F")
+    for k, col in enumerate(cols):
+        out[:, k] = col
+    return out
+
+
+def norms(q: FloatArray) -> FloatArray:
+    """Return the Euclidean norm of each row of ``q : (n, k)``, ``(n,)``."""
+    return np.sqrt(np.einsum("ij,ij->i", q, q))
 
 
 def _moved(pose: Pose, step: FloatArray, dofs: tuple[int, ...]) -> Pose:
@@ -297,13 +364,32 @@ def _moved(pose: Pose, step: FloatArray, dofs: tuple[int, ...]) -> Pose:
     return Pose(origin, rotation_to_z(axis))
 
 
-def _damped_step(jac: FloatArray, res: FloatArray, lam: float) -> FloatArray:
-    """Solve ``min |J s + r|^2 + lam |D s|^2`` (``D`` = column norms of ``J``)."""
-    damping = math.sqrt(lam) * np.sqrt(np.sum(jac * jac, axis=0))
-    lhs = np.vstack([jac, np.diag(damping)])
-    rhs = np.concatenate([-res, np.zeros(jac.shape[1])])
-    step: FloatArray = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
-    return step
+class _Step:
+    """The linearised problem at one solver iterate, solved for any damping.
+
+    Computed once per Jacobian: a rejected step only changes the damping.  Few points:
+    the damped least-squares problem itself; many: its normal equations.
+    """
+
+    def __init__(self, jac: FloatArray, res: FloatArray) -> None:
+        self.jac, self.res = jac, res
+        self.normal = len(jac) > NORMAL_EQUATIONS_FROM
+        if self.normal:
+            self.gram = jac.T @ jac
+            self.rhs = -(jac.T @ res)
+            self.norms2 = np.diag(self.gram).copy()
+        else:
+            self.norms2 = np.einsum("ij,ij->j", jac, jac)
+
+    def solve(self, lam: float) -> FloatArray:
+        """Solve ``min |J s + r|^2 + lam |D s|^2`` (``D`` = column norms of ``J``)."""
+        if self.normal:
+            lhs = self.gram + np.diag(lam * self.norms2)
+            return np.asarray(np.linalg.solve(lhs, self.rhs), dtype=np.float64)
+        lhs = np.vstack([self.jac, np.diag(math.sqrt(lam) * np.sqrt(self.norms2))])
+        rhs = np.concatenate([-self.res, np.zeros(self.jac.shape[1])])
+        step: FloatArray = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+        return step
 
 
 def refine(model: Model, points: FloatArray, pose: Pose, shape: FloatArray, *,
@@ -315,28 +401,39 @@ def refine(model: Model, points: FloatArray, pose: Pose, shape: FloatArray, *,
     ``iterations`` steps.
     """
     m = len(model.dofs)
-    res = model.residuals(pose.local(points), shape)
+    q = pose.local(points)
+    res = model.residuals(q, shape)
     cost, lam = float(res @ res), LAMBDA_START
+    linear: _Step | None = None
     for _ in range(iterations):
-        step = _damped_step(model.jacobian(pose.local(points), shape), res, lam)
+        linear = linear or _Step(model.jacobian(q, shape), res)
+        step = linear.solve(lam)
         if not np.all(np.isfinite(step)):
             break
         small = float(np.max(np.abs(step))) < step_tol
         if small and lam <= LAMBDA_START:
             break
         new_pose, new_shape = _moved(pose, step[:m], model.dofs), shape + step[m:]
-        new_res = model.residuals(new_pose.local(points), new_shape)
+        new_q = new_pose.local(points)
+        new_res = model.residuals(new_q, new_shape)
         new_cost = float(new_res @ new_res)
         if new_cost <= cost * (1.0 + COST_SLACK):
-            pose, shape, res, cost = new_pose, new_shape, new_res, new_cost
-            lam = max(lam / LAMBDA_GROWTH, LAMBDA_FLOOR)
+            pose, shape, res, cost, q = new_pose, new_shape, new_res, new_cost, new_q
+            lam, linear = max(lam / LAMBDA_GROWTH, LAMBDA_FLOOR), None
             if small:
                 break
         else:
             lam *= LAMBDA_GROWTH
             if lam > LAMBDA_GIVE_UP:
                 break
-    return Solution(pose, shape, res, cost)
+    return Solution(pose, shape, res, cost, linear.jac if linear else None)
+
+
+def jacobian_at(model: Model, points: FloatArray, sol: Solution) -> FloatArray:
+    """Return the Jacobian of ``model`` at ``sol`` (the solver's own when it has it)."""
+    if sol.jacobian is not None:
+        return sol.jacobian
+    return model.jacobian(sol.pose.local(points), sol.shape)
 
 
 def step_tolerance(data: Normalised) -> float:
@@ -346,21 +443,33 @@ def step_tolerance(data: Normalised) -> float:
 
 def multi_start(model: Model, points: FloatArray, starts: list[tuple[Pose, FloatArray]],
                 *, step_tol: float) -> Solution:
-    """Scout from every start for ``SCOUT_ITERATIONS``, then polish the cheapest.
+    """Scout from every start for ``SCOUT_ITERATIONS`` (on ``subsample(points)``), then
+    polish the cheapest.
 
     Args:
         model: the shape.
         points: ``(n, 3)`` normalised points.
-        starts: ``(pose, shape)`` starting guesses.
+        starts: ``(pose, shape)`` starting guesses, for ``subsample(points)``.
         step_tol: see ``refine``.
 
     Raises:
         ProbegenError: no start gave a finite solution.
     """
-    scouts = [refine(model, points, pose, shape, step_tol=step_tol,
+    sample = subsample(points)
+    scouts = [refine(model, sample, pose, shape, step_tol=step_tol,
                      iterations=SCOUT_ITERATIONS) for pose, shape in starts]
     finite = [s for s in scouts if math.isfinite(s.cost) and np.all(np.isfinite(s.shape))]
     if not finite:
         raise fit_error(model.name, "points that determine the shape", "no usable start")
     lead = min(finite, key=lambda s: s.cost)
-    return refine(model, points, lead.pose, lead.shape, step_tol=step_tol)
+    return polish(model, points, sample, lead.pose, lead.shape, step_tol=step_tol)
+
+
+def polish(model: Model, points: FloatArray, sample: FloatArray, pose: Pose,
+           shape: FloatArray, *, step_tol: float) -> Solution:
+    """Refine ``(pose, shape)`` to convergence: on ``sample`` first when it is a subset
+    of ``points`` (see ``subsample``), so that all points take only the last few steps."""
+    if sample is not points:
+        lead = refine(model, sample, pose, shape, step_tol=step_tol)
+        pose, shape = lead.pose, lead.shape
+    return refine(model, points, pose, shape, step_tol=step_tol)

@@ -1,0 +1,1 @@
+"""The virtual machine: interpreters that run emitted program text as a controller would."""

@@ -1,0 +1,342 @@
+"""Features of the virtual CMM: nominal definitions, measured actuals, constructions.
+
+Every :class:`DmisFeature` is held in machine coordinates (MCS) and millimetres, so it
+stays valid whatever frame is active later; the output converts it to the active PCS
+and the program's units.
+
+Measured features (:func:`fit_feature`) are fitted by least squares from the ball
+centres the CMM recorded.  Stylus compensation, two modes:
+
+* ``"feature"`` (default, what CMMs do for a measured feature): fit the shape to the
+  ball centres, then offset it by the ball radius away from the side the probe came
+  from (the PTMEAS vectors): a plane moves by ``r`` against its outward normal, an
+  INNER circle/cylinder/sphere grows by ``r``, an OUTER one shrinks, a cone's apex
+  moves ``r / sin(half angle)`` along its axis.  Exact for any tilt of the real part.
+* ``"vector"``: compensate each ball centre by ``r`` along its PTMEAS vector (the
+  nominal surface normal) and fit those points; exact only where the real surface
+  normal equals the nominal one (an error of ``r (1 - cos t)`` for a tilt ``t``).
+
+Points and lines are always vector compensated.  Cylinders are fitted from the
+nominal axis (:mod:`probegen.sim.dmis_fitting`: sparse CMM patterns fit several
+cylinders exactly); the other shapes use :mod:`probegen.geometry.fits` as they are.
+
+The actual's reported location: the fitted centre for circles and spheres, the apex
+for cones, and for unbounded features (plane, cylinder axis, line) the nominal
+location projected onto the actual feature, so actual and nominal values compare
+directly.  A cylinder keeps its nominal length (the points of a bore do not determine
+it); a point keeps its nominal vector.  Directions are signed like the nominal's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+
+from probegen.geometry.fits import (
+    fit_circle_3d,
+    fit_cone,
+    fit_cylinder,
+    fit_line_3d,
+    fit_plane,
+    fit_sphere,
+)
+from probegen.geometry.frames import FloatArray, unit
+from probegen.sim.dmis_fitting import cylinder_near
+
+Vec3 = tuple[float, float, float]
+Compensation = Literal["feature", "vector"]
+
+KINDS = ("POINT", "PLANE", "CIRCLE", "CYLNDR", "SPHERE", "CONE", "LINE")
+"""Feature types the virtual CMM defines, measures and reports."""
+
+SIDED = frozenset({"CIRCLE", "CYLNDR", "SPHERE", "CONE"})
+"""Types written with INNER|OUTER."""
+
+
+@dataclass(frozen=True, slots=True)
+class DmisFeature:
+    """A nominal (``F``) or actual (``FA``) feature, in MCS millimetres.
+
+    Attributes:
+        name: the label name (``C1`` for ``F(C1)``/``FA(C1)``).
+        kind: one of :data:`KINDS`.
+        qualifier: ``INNER``/``OUTER`` (circle, cylinder, sphere, cone), ``BND``/``UNBND``
+            (line), None otherwise.
+        location: point, centre, apex (cone), axis point or line start.
+        vector: unit normal, axis or direction; None for a sphere written without one.
+        size: diameter (circle, cylinder, sphere) or included angle in degrees (cone).
+        length: cylinder length, None if not given.
+        end: end point of a bounded line.
+        normal: the line's plane normal (``LINE`` with a third vector).
+        form: actual only: flatness, roundness, cylindricity, sphericity, conicity or
+            straightness from the fit residuals.
+        points: actual only: the compensated contact points, ``(n, 3)`` as tuples.
+    """
+
+    name: str
+    kind: str
+    qualifier: str | None
+    location: Vec3
+    vector: Vec3 | None
+    size: float | None = None
+    length: float | None = None
+    end: Vec3 | None = None
+    normal: Vec3 | None = None
+    form: float | None = None
+    points: tuple[Vec3, ...] = ()
+
+
+def vec3(array: FloatArray) -> Vec3:
+    """Return a ``(3,)`` array as a tuple of Python floats."""
+    return (float(array[0]), float(array[1]), float(array[2]))
+
+
+def arr(values: Vec3) -> FloatArray:
+    """Return a tuple as a ``(3,)`` float array."""
+    return np.array(values, dtype=np.float64)
+
+
+def signed_like(direction: FloatArray, reference: Vec3 | None) -> FloatArray:
+    """Return the unit ``direction`` flipped, if needed, to agree with ``reference``."""
+    d = unit(direction, what="direction")
+    if reference is not None and float(d @ arr(reference)) < 0.0:
+        return -d
+    return d
+
+
+# ---------------------------------------------------------------- nominal definitions
+
+_COUNTS = {
+    "POINT": (6,), "PLANE": (6,), "CIRCLE": (7,), "CYLNDR": (7, 8), "SPHERE": (4, 7),
+    "CONE": (7,), "LINE": (6, 9),
+}
+"""Numbers after ``CART`` each type takes (alternatives)."""
+
+
+def parse_nominal(name: str, kind: str, qualifier: str | None,
+                  numbers: list[float], scale: float) -> DmisFeature:
+    """Build a nominal feature in PCS millimetres from the numbers of ``FEAT/...,CART,...``.
+
+    Args:
+        name: label name.
+        kind: one of :data:`KINDS`.
+        qualifier: INNER/OUTER/BND/UNBND or None.
+        numbers: the values after ``CART`` as written.
+        scale: millimetres per program unit.
+
+    Raises:
+        ValueError: wrong count of numbers or a zero vector.
+    """
+    if len(numbers) not in _COUNTS[kind]:
+        raise ValueError(f"FEAT/{kind} takes {_counts_text(kind)} numbers after CART, "
+                         f"found {len(numbers)}")
+    v = np.array(numbers, dtype=np.float64)
+    loc = vec3(v[:3] * scale)
+    if kind == "LINE" and qualifier == "BND":
+        end = v[3:6] * scale
+        normal = vec3(unit(v[6:9], what="line normal")) if len(v) == 9 else None
+        direction = vec3(unit(end - arr(loc), what="line end points"))
+        return DmisFeature(name, kind, qualifier, loc, direction, end=vec3(end), normal=normal)
+    if kind == "SPHERE":
+        vector = vec3(unit(v[3:6], what="vector")) if len(v) == 7 else None
+        return DmisFeature(name, kind, qualifier, loc, vector, size=float(v[-1]) * scale)
+    vector = vec3(unit(v[3:6], what="vector"))
+    if kind == "LINE":
+        normal = vec3(unit(v[6:9], what="line normal")) if len(v) == 9 else None
+        return DmisFeature(name, kind, qualifier, loc, vector, normal=normal)
+    size = _nominal_size(kind, v, scale)
+    length = float(v[7]) * scale if kind == "CYLNDR" and len(v) == 8 else None
+    return DmisFeature(name, kind, qualifier, loc, vector, size=size, length=length)
+
+
+def _nominal_size(kind: str, v: FloatArray, scale: float) -> float | None:
+    if kind == "CONE":
+        return float(v[6])  # included angle, degrees: no unit scale
+    if kind in ("CIRCLE", "CYLNDR"):
+        return float(v[6]) * scale
+    return None
+
+
+def _counts_text(kind: str) -> str:
+    return " or ".join(str(n) for n in _COUNTS[kind])
+
+
+# ------------------------------------------------------------------------ measuring
+
+MINIMUM_POINTS = {"POINT": 1, "PLANE": 3, "CIRCLE": 3, "CYLNDR": 5, "SPHERE": 4, "CONE": 6,
+                  "LINE": 2}
+"""Fewest points each measured type needs (those of the least-squares fits)."""
+
+
+def fit_feature(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
+                radius: float, compensation: Compensation) -> DmisFeature:
+    """Fit the actual feature to measured ball centres and compensate the stylus.
+
+    Args:
+        nominal: the nominal feature (MCS).
+        centres: ``(n, 3)`` float, ball centres where the probe touched (MCS).
+        vectors: ``(n, 3)`` float, the unit PTMEAS vectors (out of the material, MCS).
+        radius: the stylus ball radius used for compensation (mm).
+        compensation: ``"feature"`` or ``"vector"`` (see the module docstring).
+
+    Returns:
+        The actual feature (MCS), with ``form`` and the compensated ``points``.
+
+    Raises:
+        ProbegenError: the fit cannot use the points (too few, degenerate).
+    """
+    contacts = centres - radius * vectors
+    kind = nominal.kind
+    if kind in ("POINT", "LINE") or compensation == "vector":
+        fitted = _fit_points(nominal, contacts)
+    elif kind == "PLANE":
+        fitted = _fit_plane(nominal, centres, vectors, radius)
+    else:
+        fitted = _fit_offset_shape(nominal, centres, radius)
+    return replace(fitted, points=tuple(vec3(p) for p in contacts))
+
+
+def _fit_points(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
+    """Fit contact points (already compensated) directly."""
+    kind = nominal.kind
+    if kind == "POINT":
+        return replace(nominal, location=vec3(points.mean(axis=0)), form=0.0)
+    if kind == "LINE":
+        return _fit_line(nominal, points)
+    if kind == "PLANE":
+        return _fit_plane(nominal, points, np.zeros_like(points), 0.0)
+    return _fit_offset_shape(nominal, points, 0.0)
+
+
+def _fit_plane(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
+               radius: float) -> DmisFeature:
+    fit = fit_plane(centres)
+    n = signed_like(arr(fit.normal), nominal.vector)
+    side = 1.0 if float(vectors.sum(axis=0) @ n) >= 0.0 else -1.0
+    point = arr(fit.point) - side * radius * n
+    return replace(nominal, location=_onto_plane(arr(nominal.location), point, n),
+                   vector=vec3(n), form=fit.form)
+
+
+def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) -> DmisFeature:
+    """Circle, cylinder, sphere or cone through ball centres, offset by ``radius``."""
+    grow = radius if nominal.qualifier == "INNER" else -radius
+    if nominal.kind == "CIRCLE":
+        circle = fit_circle_3d(centres)
+        return replace(nominal, location=circle.centre, size=2.0 * (circle.radius + grow),
+                       vector=vec3(signed_like(arr(circle.normal), nominal.vector)),
+                       form=circle.form)
+    if nominal.kind == "SPHERE":
+        sphere = fit_sphere(centres)
+        return replace(nominal, location=sphere.centre, size=2.0 * (sphere.radius + grow),
+                       form=sphere.form)
+    if nominal.kind == "CYLNDR":
+        return _fit_cylinder(nominal, centres, grow)
+    return _fit_cone(nominal, centres, grow)
+
+
+SEED_SLACK = 1e-9
+"""The fit started from the nominal axis is kept unless the unseeded fit's rms is lower
+by more than this (mm): among equally good cylinders the CMM reports the nominal one."""
+
+
+def _fit_cylinder(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
+    cyl = fit_cylinder(centres)
+    point, axis, radius, form = arr(cyl.point), arr(cyl.axis), cyl.radius, cyl.form
+    seeded = cylinder_near(centres, arr(nominal.vector or cyl.axis))
+    if seeded is not None and seeded.rms <= cyl.rms + SEED_SLACK:
+        point, axis, radius, form = seeded.point, seeded.axis, seeded.radius, seeded.form
+    axis = signed_like(axis, nominal.vector)
+    location = _onto_line(arr(nominal.location), point, axis)
+    return replace(nominal, location=vec3(location), vector=vec3(axis),
+                   size=2.0 * (radius + grow), form=form)
+
+
+def _fit_cone(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
+    """Cone through ball centres; the apex moves ``grow / sin(half angle)`` towards the
+    narrow end (INNER, ``grow > 0``) or the wide end (OUTER)."""
+    cone = fit_cone(centres)
+    opening = arr(cone.axis)  # points to increasing radius
+    apex = arr(cone.apex) - (grow / math.sin(cone.half_angle)) * opening
+    return replace(nominal, location=vec3(apex),
+                   vector=vec3(signed_like(opening, nominal.vector)),
+                   size=math.degrees(2.0 * cone.half_angle), form=cone.form)
+
+
+def _fit_line(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
+    fit = fit_line_3d(points)
+    d = signed_like(arr(fit.direction), nominal.vector)
+    return _line_actual(nominal, arr(fit.point), d, fit.form)
+
+
+def _line_actual(nominal: DmisFeature, point: FloatArray, direction: FloatArray,
+                 form: float) -> DmisFeature:
+    """A line's actual record: nominal points projected onto the actual line."""
+    start = _onto_line(arr(nominal.location), point, direction)
+    end = _onto_line(arr(nominal.end), point, direction) if nominal.end else None
+    normal = None
+    if nominal.normal is not None:
+        raw = arr(nominal.normal)
+        square = raw - (raw @ direction) * direction
+        normal = vec3(unit(square, what="line normal"))
+    return replace(nominal, location=vec3(start), vector=vec3(direction), normal=normal,
+                   end=vec3(end) if end is not None else None, form=form)
+
+
+def _onto_plane(point: FloatArray, plane_point: FloatArray, normal: FloatArray) -> Vec3:
+    """Orthogonal projection of ``point`` onto a plane."""
+    return vec3(point - float((point - plane_point) @ normal) * normal)
+
+
+def _onto_line(point: FloatArray, line_point: FloatArray, direction: FloatArray) -> FloatArray:
+    """Orthogonal projection of ``point`` onto a line."""
+    return np.asarray(line_point + float((point - line_point) @ direction) * direction)
+
+
+# --------------------------------------------------------------------- constructions
+
+
+def intersect_planes(nominal: DmisFeature, first: DmisFeature,
+                     second: DmisFeature) -> DmisFeature:
+    """``CONST/LINE,F(x),INTOF,FA(plane),FA(plane)``: the line where two planes meet.
+
+    The direction is signed like the nominal's; the location is the nominal location
+    projected onto the line.
+
+    Raises:
+        ValueError: the planes are parallel.
+    """
+    n1, n2 = arr(_vector(first)), arr(_vector(second))
+    cross = np.cross(n1, n2)
+    if float(np.linalg.norm(cross)) < 1e-9:
+        raise ValueError(f"planes {first.name} and {second.name} are parallel")
+    d = signed_like(cross, nominal.vector)
+    rhs = [n1 @ arr(first.location), n2 @ arr(second.location), d @ arr(nominal.location)]
+    point = np.linalg.solve(np.vstack([n1, n2, d]), np.array(rhs))
+    return _line_actual(replace(nominal, qualifier=nominal.qualifier or "UNBND"),
+                        point, d, 0.0)
+
+
+def intersect_line_plane(nominal: DmisFeature, line: DmisFeature,
+                         plane: DmisFeature) -> DmisFeature:
+    """``CONST/POINT,F(x),INTOF,FA(line),FA(plane)``: where a line meets a plane.
+
+    Raises:
+        ValueError: the line is parallel to the plane.
+    """
+    d, n = arr(_vector(line)), arr(_vector(plane))
+    along = float(d @ n)
+    if abs(along) < 1e-9:
+        raise ValueError(f"line {line.name} is parallel to plane {plane.name}")
+    start = arr(line.location)
+    t = float((arr(plane.location) - start) @ n) / along
+    return replace(nominal, location=vec3(start + t * d), form=0.0)
+
+
+def _vector(feature: DmisFeature) -> Vec3:
+    if feature.vector is None:
+        raise ValueError(f"feature {feature.name} has no direction")
+    return feature.vector

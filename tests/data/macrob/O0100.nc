@@ -1,0 +1,6 @@
+%
+O0100 (A MACRO: ITS OWN LOCALS, ARGUMENTS A B C)
+#100 = #1 + #2 + #3
+#1 = 99.
+M99
+%

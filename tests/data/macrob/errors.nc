@@ -1,0 +1,13 @@
+%
+O9001 (EVERY LINE BELOW HOLDS ONE MISTAKE)
+G0 X(unclosed comment
+#1 = 2 +
+IF [#1 EQ 1] GOTO
+WHILE [#1 LT 3] DO4
+DPRNT[X#1[93]]
+G0 X1 (ok) )
+#1 = #2 EQ 3
+#1 = ATAN[1]/2
+G0 N5
+G1 X1 ! 
+%
