@@ -15,9 +15,15 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/probegen compile samples/sphere25/sphere_test.toml -d fanuc -d dmis -o out
 	$(BIN)/probegen sphere-points --layout octahedral
-	$(BIN)/probegen ingest samples/sphere25/sphere_test.log --spec samples/sphere25/sphere_test.toml -o out --write-calibration out/probe-calibration.toml
-	@echo "programs written under out/: out/sphere_test.nc (Fanuc Macro B), out/sphere_test.dmi (DMIS)"
-	@echo "results of the sample log under out/: results.json, results.csv, probe-calibration.toml"
+	@echo "== the virtual machine runs out/sphere_test.nc with the sphere 1.2, -0.9, 0.4 mm off nominal"
+	@echo "   and a lobing probe, and sends what it prints over a pseudo-terminal to probegen capture"
+	rm -f out/run.log
+	$(BIN)/probegen sim out/sphere_test.nc --spec samples/sphere25/sphere_test.toml \
+	    --offset 1.2 -0.9 0.4 --lobing 0.0012 0.0008 0.0005 --pty out/vm.tty --pty-delay 3 & \
+	    sleep 2; $(BIN)/probegen capture --port out/vm.tty --out out/run.log --timeout 20; wait
+	$(BIN)/probegen ingest out/run.log --spec samples/sphere25/sphere_test.toml -o out --write-calibration out/probe-calibration.toml
+	@echo "programs: out/sphere_test.nc (Fanuc Macro B), out/sphere_test.dmi (DMIS)"
+	@echo "machine log: out/run.log; results: out/results.json, out/results.csv, out/probe-calibration.toml"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

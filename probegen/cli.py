@@ -2,7 +2,8 @@
 
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
 collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
-tolerance, 9 capture ended without the end marker, 64 usage.
+tolerance, 9 capture ended without the end marker, 10 the simulated program alarmed,
+64 usage.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ class ExitCode(IntEnum):
     CALIBRATION = 7
     NOT_OK = 8
     CAPTURE_INCOMPLETE = 9
+    SIM_ALARM = 10
     USAGE = 64
 
 
@@ -148,6 +150,72 @@ def _capture(args: argparse.Namespace) -> int:
     return ExitCode.OK if res.reason == "end-marker" else ExitCode.CAPTURE_INCOMPLETE
 
 
+def _sim(args: argparse.Namespace) -> int:
+    if not args.pty:
+        return _simulate(args, None)
+    from probegen.sim.serial_play import PtyLink
+
+    with PtyLink(args.pty) as link:
+        print(f"virtual machine serial port: {args.pty}", file=sys.stderr)
+        return _simulate(args, link)
+
+
+def _simulate(args: argparse.Namespace, link: object | None) -> int:
+    import numpy as np
+
+    from probegen.machine.kinematics import load_machine
+    from probegen.machine.probe_model import Lobing, ProbeModel
+    from probegen.sim.contact import PlacedPart
+    from probegen.sim.serial_play import PtyLink
+    from probegen.sim.vm import VirtualMachine, program_kind, run_text
+
+    part, ball = _sim_part(args)
+    c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    if isinstance(part, tuple):
+        placed = PlacedPart.from_spheres(part[0], part[1], rotation=rotation,
+                                         translation=args.offset)
+    else:
+        placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset)
+    probe = ProbeModel(ball, Lobing(*args.lobing), noise_sigma=args.noise, seed=args.seed)
+    kin = load_machine(args.errors) if args.errors else None
+    vm = VirtualMachine(placed, probe, kin)
+    text = Path(args.program).read_text(encoding="ascii", errors="replace")
+    result = run_text(text, vm, kind=program_kind(args.program), source=args.program)
+    data = result.output.encode("ascii", errors="replace")
+    if isinstance(link, PtyLink):
+        print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
+        link.play(data, delay=args.pty_delay)
+    elif args.output == "-":
+        sys.stdout.write(result.output)
+    else:
+        Path(args.output).write_bytes(data)
+        print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
+    if result.alarm:
+        print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
+        return ExitCode.SIM_ALARM
+    return ExitCode.OK
+
+
+def _sim_part(args: argparse.Namespace) -> tuple[object, float]:
+    from probegen import cad
+    from probegen.machine.profile import load_profile
+
+    if args.spec:
+        from probegen.spec import load_spec
+
+        spec = load_spec(args.spec)
+        ball = spec.machine.probe.ball_radius
+        if args.part or spec.model is not None:
+            return cad.load_step(args.part or str(spec.model)), ball
+        centres = [f.centre for f in spec.features if f.centre is not None]
+        radii = [(f.diameter or 0.0) / 2.0 for f in spec.features if f.centre is not None]
+        return (centres, radii), ball
+    if not (args.part and args.machine):
+        raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
+    return cad.load_step(args.part), load_profile(args.machine).probe.ball_radius
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
     parser = argparse.ArgumentParser(
@@ -200,6 +268,27 @@ def build_parser() -> argparse.ArgumentParser:
                     help="stop after this many idle seconds (60)")
     cp.add_argument("--append", action="store_true", help="append to an existing log")
     cp.set_defaults(func=_capture)
+
+    sm = sub.add_parser("sim", help="run a program on the virtual machine")
+    sm.add_argument("program", help="program text: .nc (Macro B) or .dmi/.dms (DMIS)")
+    sm.add_argument("--spec", help="take the part and the machine profile from a spec")
+    sm.add_argument("--part", help="the part model (STEP)")
+    sm.add_argument("--machine", help="machine profile (TOML)")
+    sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
+    sm.add_argument("--offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+                    metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
+    sm.add_argument("--rotate-z", type=float, default=0.0, metavar="DEG",
+                    help="part rotation about Z, degrees")
+    sm.add_argument("--lobing", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+                    metavar=("LATERAL", "AXIAL", "LOBE"), help="probe pre-travel, mm")
+    sm.add_argument("--noise", type=float, default=0.0, help="trigger noise sigma, mm")
+    sm.add_argument("--seed", type=int, default=0, help="noise seed")
+    sm.add_argument("-o", "--output", default="-", help="what the machine sends (default -)")
+    sm.add_argument("--pty", metavar="LINK",
+                    help="play the output over a pseudo-terminal linked at LINK")
+    sm.add_argument("--pty-delay", type=float, default=1.0,
+                    help="seconds to wait for the reader before sending (1)")
+    sm.set_defaults(func=_sim)
     return parser
 
 

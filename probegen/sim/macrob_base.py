@@ -82,6 +82,9 @@ class Settings:
         stop_at_m00: M00 ends the run (``stopped == "M00"``); by default M00 and M01
             are recorded and the program continues, as after a cycle start.
         rapid_mm_min: rapid traverse rate for the virtual clock (``#3001``).
+        home: the machine position when the program starts (machine coordinates, mm);
+            a real program starts wherever the last one left the spindle, usually at
+            the tool-change position high above the table.
         max_nesting: subprogram and macro calls nested at most this deep (M98 + G65).
         max_macro_nesting: G65 macro calls nested at most this deep (new local levels).
         g_aliases: G codes of a builder's control read as Fanuc codes, e.g.
@@ -97,3 +100,4 @@ class Settings:
     max_nesting: int = 10
     max_macro_nesting: int = 5
     g_aliases: Mapping[float, float] = field(default_factory=dict)
+    home: tuple[float, float, float] = (0.0, 0.0, 0.0)

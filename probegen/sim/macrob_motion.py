@@ -109,7 +109,7 @@ class Motion:
         self.clock_ms = 0.0
         self.codes: list[int] = []
         self.changed = False
-        self.position: Point = (0.0, 0.0, 0.0)
+        self.position: Point = settings.home
         self.work = [0.0, 0.0, 0.0]
         self.skip_point: Point = (0.0, 0.0, 0.0)
         self.version = -1

@@ -1,0 +1,210 @@
+"""The virtual machine: the interpreters driving a machine with known errors and a part.
+
+``VirtualMachine`` implements both the Macro B interpreter's ``Machine`` protocol and the
+DMIS interpreter's ``Cmm`` protocol:
+
+* every commanded position (the ball centre, in machine coordinates) goes through the
+  kinematic error model (``machine.kinematics``) to where the ball really is;
+* a positioning move (G0, G1, DMIS ``GOTO``) along which the ball meets the part raises
+  the stylus-collision alarm 9100, naming the face;
+* a skip move (G31, a DMIS ``PTMEAS``) stops where the ball first meets the part
+  (``sim.contact``, exact on analytic faces), plus the probe's direction-dependent
+  pre-travel and its noise (``machine.probe_model``); the skip position reported is the
+  commanded position at that moment, as the control reads its own scales.  A pre-travel
+  that runs past the end of the move means the trigger never came.
+
+Frames: the part is placed in machine coordinates (``PlacedPart``).  The probe's length
+offset is zero (the controlled point is the ball centre) and the control's G54 offset is
+``work_offset`` (zero by default, when machine coordinates are work coordinates).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from probegen.machine.kinematics import Machine
+from probegen.machine.probe_model import ProbeModel
+from probegen.sim.alarms import SimAlarm
+from probegen.sim.contact import ContactHit, PlacedPart
+
+Vec3 = tuple[float, float, float]
+
+COLLISION_ALARM = 9100
+"""Alarm number of a stylus collision during a positioning move."""
+LEAVE_MARGIN = 1e-6
+"""How clear (mm) a ball backing away from a touch must be before contact counts again."""
+
+
+@dataclass
+class VirtualMachine:
+    """A machine (kinematics with errors), a probe and a placed part.
+
+    Attributes:
+        part: the part as placed in machine coordinates.
+        probe: ball radius, pre-travel and noise.
+        kinematics: the kinematic chain with its errors, or None for a perfect machine.
+        touches: every skip hit so far (for tests and reports).
+    """
+
+    part: PlacedPart
+    probe: ProbeModel
+    kinematics: Machine | None = None
+    touches: list[ContactHit] = field(default_factory=list)
+
+    @property
+    def ball_radius(self) -> float:
+        """The physical stylus ball radius, mm."""
+        return self.probe.ball_radius
+
+    def actual(self, p: Vec3 | np.ndarray) -> np.ndarray:
+        """Where the ball centre really is when the axes are commanded to ``p``."""
+        q = np.asarray(p, dtype=np.float64)
+        if self.kinematics is None:
+            return q
+        return np.asarray(self.kinematics.actual_tool_point(q, np.zeros(3)))
+
+    def _clear(self, start: Vec3, end: Vec3, what: str) -> None:
+        a, b = self._leave_contact(self.actual(start), self.actual(end))
+        hit = self.part.first_contact(a, b, self.ball_radius)
+        if hit is not None:
+            x, y, z = (float(v) for v in hit.point)
+            raise SimAlarm(COLLISION_ALARM, f"STYLUS COLLISION ({what}) WITH FACE "
+                           f"{hit.face_id} AT X{x:.4f} Y{y:.4f} Z{z:.4f}")
+
+    def _leave_contact(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Skip the first part of a move that backs a touching ball away from the part.
+
+        After a trigger the ball sits on the surface (pre-travel deep); a move away from
+        the surface is free until the ball is clear, a move into it is a collision.
+        """
+        depth = -self.part.clearance(a, self.ball_radius)
+        if depth < 0.0:
+            return a, b
+        hit = self.part.first_contact(a, b, self.ball_radius)
+        length = float(np.linalg.norm(b - a))
+        if hit is None or length == 0.0:
+            return a, b
+        away = float(np.dot((b - a) / length, hit.normal))
+        if away <= 1e-3:
+            return a, b
+        s = min((depth + LEAVE_MARGIN) / away, length)
+        return a + s * (b - a) / length, b
+
+    def rapid(self, start: Vec3, end: Vec3) -> None:
+        """G0: raises the collision alarm if the ball meets the part."""
+        self._clear(start, end, "G0")
+
+    def feed(self, start: Vec3, end: Vec3, feed_mm_min: float) -> None:
+        """G1: raises the collision alarm if the ball meets the part."""
+        self._clear(start, end, "G1")
+
+    def move(self, start: Vec3, end: Vec3) -> None:
+        """DMIS positioning move."""
+        self._clear(start, end, "GOTO")
+
+    def skip(self, start: Vec3, end: Vec3, feed_mm_min: float) -> Vec3 | None:
+        """G31: the commanded position where the trigger registered, or None."""
+        a, b = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+        length = float(np.linalg.norm(b - a))
+        if length == 0.0:
+            return None
+        hit = self.part.first_contact(self.actual(a), self.actual(b), self.ball_radius)
+        if hit is None:
+            return None
+        delay = float(self.probe.noisy_offset((b - a) / length))
+        t = hit.t + delay / length
+        if t > 1.0:
+            return None
+        self.touches.append(hit)
+        p = a + t * (b - a)
+        return (float(p[0]), float(p[1]), float(p[2]))
+
+    def probe_move(self, start: Vec3, direction: Vec3, distance: float) -> Vec3 | None:
+        """A DMIS probing move from ``start`` along ``direction`` for ``distance``."""
+        d = np.asarray(direction, dtype=np.float64)
+        end = np.asarray(start, dtype=np.float64) + distance * d / np.linalg.norm(d)
+        return self.skip(start, (float(end[0]), float(end[1]), float(end[2])), 0.0)
+
+
+class CmmAdapter:
+    """The ``Cmm`` face of a ``VirtualMachine`` for the DMIS interpreter."""
+
+    def __init__(self, vm: VirtualMachine) -> None:
+        self.vm = vm
+
+    @property
+    def ball_radius(self) -> float:
+        """The physical stylus ball radius, mm."""
+        return self.vm.ball_radius
+
+    def move(self, start: Vec3, end: Vec3) -> None:
+        """Positioning move; the collision alarm if the ball meets the part."""
+        self.vm.move(start, end)
+
+    def probe(self, start: Vec3, direction: Vec3, distance: float) -> Vec3 | None:
+        """Probing move; the ball centre where the trigger registered, or None."""
+        return self.vm.probe_move(start, direction, distance)
+
+
+@dataclass(frozen=True, slots=True)
+class SimResult:
+    """What a simulated run produced.
+
+    Attributes:
+        output: exactly what the machine sends (the DPRNT log or the DMIS output file).
+        alarm: ``"number message (line n)"`` when the run stopped on an alarm, else None.
+        touches: how many skip moves touched the part.
+    """
+
+    output: str
+    alarm: str | None
+    touches: int
+
+
+HOME: Vec3 = (0.0, 0.0, 500.0)
+"""Where the ball centre is when a simulated program starts: high above the part."""
+
+
+def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<program>",
+             tool: int = 20, home: Vec3 = HOME,
+             work_offset: Vec3 = (0.0, 0.0, 0.0)) -> SimResult:
+    """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
+
+    Args:
+        text: the program.
+        vm: the machine, with the part placed in machine coordinates.
+        kind: ``"macrob"`` or ``"dmis"``.
+        source: the file name for messages.
+        tool: the probe's tool number (its length offset is set to 0).
+        home: where the ball centre is when the program starts (machine coordinates).
+        work_offset: the G54 offset the control holds (Macro B only), mm.
+    """
+    if kind == "dmis":
+        from probegen.sim.dmis_vm import run_dmis
+
+        dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
+        alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
+        return SimResult(dres.output, alarm, len(vm.touches))
+    from probegen.sim.macrob import Settings, run_program
+
+    variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
+                 11000 + tool: 0.0, 10000 + tool: 0.0}
+    res = run_program(text, vm, source=source, variables=variables,
+                      settings=Settings(home=home))
+    alarm = None
+    if res.alarm is not None:
+        alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"
+    return SimResult(res.output, alarm, len(vm.touches))
+
+
+def _alarm_text(a: SimAlarm) -> str:
+    line = f" (line {a.line})" if getattr(a, "line", None) else ""
+    return f"{a.number} {a.message}{line}"
+
+
+def program_kind(path: str | Path) -> str:
+    """``"dmis"`` for .dmi/.dms/.dmis files, else ``"macrob"``."""
+    return "dmis" if Path(path).suffix.lower() in (".dmi", ".dms", ".dmis") else "macrob"
