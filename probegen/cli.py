@@ -14,6 +14,7 @@ import os
 import sys
 from enum import IntEnum
 from pathlib import Path
+from typing import Any
 
 from probegen import __version__
 from probegen.errors import ProbegenError
@@ -197,7 +198,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     return ExitCode.OK
 
 
-def _sim_part(args: argparse.Namespace) -> tuple[object, float]:
+def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     from probegen import cad
     from probegen.machine.profile import load_profile
 
