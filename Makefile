@@ -31,8 +31,9 @@ test: $(STAMP)
 	$(BIN)/mypy probegen
 
 goldens: $(STAMP)
-	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q tests/test_golden.py tests/test_bad_inputs.py tests/test_cad.py
-	git status --short tests/golden tests/bad_inputs
+	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q tests/test_golden.py tests/test_bad_inputs.py \
+	    tests/test_cad.py tests/test_ingest.py tests/test_dmis_vm.py tests/test_macrob.py
+	git status --short tests
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sphere_test.py

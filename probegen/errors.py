@@ -113,6 +113,17 @@ class ResultsParseError(ParseError):
     """Returned data (DPRNT log, DMIS output) that does not parse."""
 
 
+def strict_error(source: str, what: str, diagnostics: tuple[Diagnostic, ...],
+                 shown: int = 10) -> ResultsParseError:
+    """The error a reader raises in strict mode: the first ``shown`` diagnostics in full."""
+    count = len(diagnostics)
+    lines = [f"{source}: {count} problem{'s' if count > 1 else ''} in the {what}"]
+    lines += [str(d) for d in diagnostics[:shown]]
+    if count > shown:
+        lines.append(f"... and {count - shown} more")
+    return ResultsParseError("\n".join(lines), diagnostics)
+
+
 class CalibrationError(ProbegenError):
     """Calibration data that cannot determine what was asked."""
 

@@ -40,7 +40,12 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from probegen.dmis import Label, Param, Statement, Text, format_param, parse_dmis_recovering
-from probegen.errors import Diagnostic, ProbegenError, ResultsParseError, did_you_mean
+from probegen.errors import (
+    Diagnostic,
+    ProbegenError,
+    did_you_mean,
+    strict_error,
+)
 
 Vec3 = tuple[float, float, float]
 
@@ -600,19 +605,8 @@ def parse_dmis_output(text: str, *, source: str = "<string>", strict: bool = Fal
         reader.read(stmt)
     output = reader.result(parse_errors)
     if strict and output.diagnostics:
-        raise _strict_error(output)
+        raise strict_error(output.source, "DMIS output", output.diagnostics)
     return output
-
-
-def _strict_error(output: DmisOutput, shown: int = 10) -> ResultsParseError:
-    """Build the error raised in strict mode: the first ``shown`` diagnostics in full."""
-    count = len(output.diagnostics)
-    plural = "s" if count > 1 else ""
-    lines = [f"{output.source}: {count} problem{plural} in the DMIS output"]
-    lines += [str(d) for d in output.diagnostics[:shown]]
-    if count > shown:
-        lines.append(f"... and {count - shown} more")
-    return ResultsParseError("\n".join(lines), output.diagnostics)
 
 
 def read_dmis_output(path: str | os.PathLike[str], *, strict: bool = False) -> DmisOutput:

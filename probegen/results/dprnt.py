@@ -21,22 +21,21 @@ Example:
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import functools
-import gc
 import itertools
 import math
 import os
 import re
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
-from probegen.errors import Diagnostic, ProbegenError, ResultsParseError
+from probegen.errors import Diagnostic, ProbegenError, strict_error
+from probegen.gcpause import collector_paused
 from probegen.resources import grammar_text
 
 if TYPE_CHECKING:
@@ -604,23 +603,6 @@ def _read_lines(builder: _Builder, lines: list[str], *, fast: bool) -> None:
             _read_line(builder, lineno, clean)
 
 
-@contextlib.contextmanager
-def _collector_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector while a log is read.
-
-    Reading allocates a record per line and makes no reference cycles; with the
-    collector running it rescans the growing record lists over and over (a
-    1,000,000-line log reads 1.5 times slower).  The previous state is restored.
-    """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
-
-
 def parse_dprnt(
     text: str | bytes, *, source: str = "<string>", strict: bool = False, fast: bool = True
 ) -> DprntLog:
@@ -644,22 +626,12 @@ def parse_dprnt(
     if isinstance(text, bytes):
         text = decode_dprnt(text)
     builder = _Builder(source)
-    with _collector_paused():
+    with collector_paused():
         _read_lines(builder, _split_lines(text), fast=fast)
         log = builder.result()
     if strict and log.diagnostics:
-        raise _strict_error(log)
+        raise strict_error(log.source, "DPRNT log", log.diagnostics)
     return log
-
-
-def _strict_error(log: DprntLog, shown: int = 10) -> ResultsParseError:
-    """Build the error raised in strict mode: the first ``shown`` diagnostics in full."""
-    count = len(log.diagnostics)
-    lines = [f"{log.source}: {count} problem{'s' if count > 1 else ''} in the DPRNT log"]
-    lines += [str(d) for d in log.diagnostics[:shown]]
-    if count > shown:
-        lines.append(f"... and {count - shown} more")
-    return ResultsParseError("\n".join(lines), log.diagnostics)
 
 
 def read_dprnt(path: str | os.PathLike[str], *, strict: bool = False) -> DprntLog:
