@@ -114,7 +114,7 @@ def _ingest(args: argparse.Namespace) -> int:
 
     spec = load_spec(args.spec)
     cal = load_calibration(args.calibration) if args.calibration else None
-    result = ingest(args.log, spec, calibration=cal)
+    result = ingest(args.log, spec, calibration=cal, with_path=True)
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
     for note in result.notes:

@@ -27,6 +27,8 @@ from probegen.evaluate import SphereTestResult, evaluate_sphere_test
 from probegen.results import DprntLog, read_dprnt
 from probegen.spec import Spec
 
+Vec3 = tuple[float, float, float]
+
 MIN_POINTS = 5
 """Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
 
@@ -40,17 +42,24 @@ class Ingested:
         log: the parsed log (with its diagnostics).
         results: one evaluated result per spec feature that has touches.
         notes: problems found while matching (missing touches, alarms in the log).
+        path: the planned stylus path at nominal, as (feature, kind, start, end) segments
+            (kind: rapid, protected, or touch ...), for the report.
     """
 
     source: str
     log: DprntLog
     results: tuple[SphereTestResult, ...]
     notes: tuple[str, ...]
+    path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
-           calibration: ProbeCalibration | None = None) -> Ingested:
-    """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for."""
+           calibration: ProbeCalibration | None = None, with_path: bool = False) -> Ingested:
+    """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for.
+
+    ``with_path`` also plans the whole program again (with its collision check) to
+    record the nominal stylus path for the report.
+    """
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
     log = read_dprnt(log_path)
@@ -84,7 +93,13 @@ def ingest(log_path: str | Path, spec: Spec, *,
     if not results:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
-    return Ingested(str(log_path), log, tuple(results), tuple(notes))
+    path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
+    if with_path:
+        from probegen.planning import plan_program
+
+        segments = plan_program(spec, runtime_variables=True).clearance.segments
+        path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
+    return Ingested(str(log_path), log, tuple(results), tuple(notes), path)
 
 
 def _ranges(numbers: list[int]) -> str:
@@ -110,6 +125,8 @@ def to_json(ing: Ingested) -> str:
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
         "features": [_feature_json(r) for r in ing.results],
+        "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
+                  "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
     return json.dumps(doc, indent=2) + "\n"
 
