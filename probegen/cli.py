@@ -40,6 +40,7 @@ class ExitCode(IntEnum):
 def _compile(args: argparse.Namespace) -> int:
     from probegen.dialects import get_dialect
     from probegen.planning import plan_program
+    from probegen.progress import Bar
     from probegen.spec import load_spec
 
     spec = load_spec(args.spec)
@@ -47,7 +48,9 @@ def _compile(args: argparse.Namespace) -> int:
     outputs = []
     for name in names:
         dialect = get_dialect(name)
-        planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES)
+        with Bar(f"planning for {name}", unit="steps") as bar:
+            planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
+                                   progress=bar)
         text = dialect.generate(planned.program)
         if args.output == "-":
             sys.stdout.write(text)
@@ -140,9 +143,13 @@ def _capture(args: argparse.Namespace) -> int:
     print(f"capturing from {args.port} into {args.out} ({args.baud} baud, {args.bits}"
           f"{args.parity}{args.stop_bits:g}, xon/xoff {'on' if args.xonxoff else 'off'}); "
           "start the program now, Ctrl-C stops", file=sys.stderr)
-    res = capture(args.port, args.out, baudrate=args.baud, bytesize=args.bits,
-                  parity=_PARITY[args.parity], stopbits=args.stop_bits,
-                  xonxoff=args.xonxoff, timeout_s=args.timeout, append=args.append)
+    from probegen.progress import Bar
+
+    with Bar("capturing", unit="bytes") as bar:
+        res = capture(args.port, args.out, baudrate=args.baud, bytesize=args.bits,
+                      parity=_PARITY[args.parity], stopbits=args.stop_bits,
+                      xonxoff=args.xonxoff, timeout_s=args.timeout, append=args.append,
+                      progress=lambda _total, chunk: bar(len(chunk)))
     why = {"end-marker": "the program's end marker arrived",
            "timeout": f"nothing arrived for {args.timeout:g} s",
            "interrupted": "stopped by the user",
@@ -180,9 +187,13 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset)
     probe = ProbeModel(ball, Lobing(*args.lobing), noise_sigma=args.noise, seed=args.seed)
     kin = load_machine(args.errors) if args.errors else None
-    vm = VirtualMachine(placed, probe, kin)
+    from probegen.progress import Bar
+
     text = Path(args.program).read_text(encoding="ascii", errors="replace")
-    result = run_text(text, vm, kind=program_kind(args.program), source=args.program)
+    probes = text.upper().count("G31") + text.upper().count("PTMEAS")
+    with Bar("simulating", probes, unit="touches") as bar:
+        vm = VirtualMachine(placed, probe, kin, on_touch=bar)
+        result = run_text(text, vm, kind=program_kind(args.program), source=args.program)
     data = result.output.encode("ascii", errors="replace")
     if isinstance(link, PtyLink):
         print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
@@ -223,6 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="probegen",
         description="Compile measuring programs for CNC machine tools and CMMs.")
     parser.add_argument("--version", action="version", version=f"probegen {__version__}")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bars (they only draw on a terminal anyway)")
     sub = parser.add_subparsers(dest="command", required=True)
 
     c = sub.add_parser("compile", help="plan a spec and write the measuring program(s)")
@@ -300,6 +313,9 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:
         return ExitCode.OK if exc.code == 0 else ExitCode.USAGE
+    import probegen.progress
+
+    probegen.progress.ENABLED = not args.quiet
     try:
         return int(args.func(args))
     except ProbegenError as exc:

@@ -7,6 +7,7 @@ a plain flag so that planning never imports the dialects.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from probegen import ir
@@ -47,13 +48,15 @@ def make_setup(spec: Spec) -> ir.Setup:
     )
 
 
-def plan_program(spec: Spec, *, runtime_variables: bool) -> PlannedProgram:
+def plan_program(spec: Spec, *, runtime_variables: bool,
+                 progress: Callable[[int], None] | None = None) -> PlannedProgram:
     """Plan every feature of ``spec`` and check the whole path for collisions.
 
     Args:
         spec: the validated spec.
         runtime_variables: whether the target controller computes at run time (Macro B
             yes, DMIS no); decides how a sphere of uncertain position is located.
+        progress: called with 1 for every feature planned and every node checked.
 
     Returns:
         The planned program.
@@ -76,7 +79,9 @@ def plan_program(spec: Spec, *, runtime_variables: bool) -> PlannedProgram:
             body += locate.locate_runtime(p, machine, spec.clearance_z)
         else:
             body += locate.locate_frame(p, machine, spec.clearance_z)
+        if progress is not None:
+            progress(1)
     program = ir.Program(make_setup(spec), tuple(body))
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
-    report = check_program(program, obstacle, plans, machine)
+    report = check_program(program, obstacle, plans, machine, progress=progress)
     return PlannedProgram(program, tuple(plans), report)

@@ -26,7 +26,7 @@ gives the geometry without a model.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -218,7 +218,8 @@ class _Walker:
 
 
 def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
-                  machine: MachineProfile) -> ClearanceReport:
+                  machine: MachineProfile, *,
+                  progress: Callable[[int], None] | None = None) -> ClearanceReport:
     """Check every move of ``program``; raise ``CollisionError`` at the first bad one."""
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -252,6 +253,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 f"expected a clearance of at least {clear:.3f} mm")
 
     for node in ir.walk(program.body):
+        if progress is not None:
+            progress(1)
         if isinstance(node, ir.FeatureBlock):
             feature = node.feature.id
         elif isinstance(node, ir.Assign):

@@ -20,6 +20,7 @@ offset is zero (the controlled point is the ball centre) and the control's G54 o
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -47,12 +48,14 @@ class VirtualMachine:
         probe: ball radius, pre-travel and noise.
         kinematics: the kinematic chain with its errors, or None for a perfect machine.
         touches: every skip hit so far (for tests and reports).
+        on_touch: called with 1 after every skip hit (progress).
     """
 
     part: PlacedPart
     probe: ProbeModel
     kinematics: Machine | None = None
     touches: list[ContactHit] = field(default_factory=list)
+    on_touch: Callable[[int], None] | None = None
 
     @property
     def ball_radius(self) -> float:
@@ -119,6 +122,8 @@ class VirtualMachine:
         if t > 1.0:
             return None
         self.touches.append(hit)
+        if self.on_touch is not None:
+            self.on_touch(1)
         p = a + t * (b - a)
         return (float(p[0]), float(p[1]), float(p[2]))
 

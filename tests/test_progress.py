@@ -1,0 +1,42 @@
+"""Progress bars draw only on a terminal and only when not --quiet."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+
+from probegen import progress
+
+
+class Tty(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_bar_draws_on_a_terminal() -> None:
+    out = Tty()
+    with progress.Bar("planning", 4, unit="steps", stream=out) as bar:
+        for _ in range(4):
+            bar(1)
+    assert out.getvalue().endswith("\rplanning [" + "#" * 30 + "] 4/4 steps\n")
+
+
+def test_bar_is_silent_off_a_terminal_and_when_quiet(monkeypatch: pytest.MonkeyPatch) -> None:
+    out = io.StringIO()
+    with progress.Bar("x", 2, stream=out) as bar:
+        bar(2)
+    assert out.getvalue() == ""
+    monkeypatch.setattr(progress, "ENABLED", False)
+    tty = Tty()
+    with progress.Bar("x", 2, stream=tty) as bar:
+        bar(2)
+    assert tty.getvalue() == ""
+
+
+def test_quiet_flag_turns_bars_off() -> None:
+    from probegen.cli import main
+
+    assert main(["--quiet", "sphere-points"]) == 0
+    assert progress.ENABLED is False
+    progress.ENABLED = True
