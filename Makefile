@@ -22,8 +22,10 @@ demo: $(STAMP)
 	    --offset 1.2 -0.9 0.4 --lobing 0.0012 0.0008 0.0005 --pty out/vm.tty --pty-delay 3 & \
 	    sleep 2; $(BIN)/probegen capture --port out/vm.tty --out out/run.log --timeout 20; wait
 	$(BIN)/probegen ingest out/run.log --spec samples/sphere25/sphere_test.toml -o out --write-calibration out/probe-calibration.toml
+	$(BIN)/probegen report out/results.json -o out/report.html
 	@echo "programs: out/sphere_test.nc (Fanuc Macro B), out/sphere_test.dmi (DMIS)"
 	@echo "machine log: out/run.log; results: out/results.json, out/results.csv, out/probe-calibration.toml"
+	@echo "report: out/report.html"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

@@ -228,6 +228,14 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     return cad.load_step(args.part), load_profile(args.machine).probe.ball_radius
 
 
+def _report(args: argparse.Namespace) -> int:
+    from probegen.report import write_report
+
+    out = write_report(args.results, args.output, title=args.title)
+    print(f"wrote the report {out}")
+    return ExitCode.OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
     parser = argparse.ArgumentParser(
@@ -303,6 +311,12 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--pty-delay", type=float, default=1.0,
                     help="seconds to wait for the reader before sending (1)")
     sm.set_defaults(func=_sim)
+
+    rp = sub.add_parser("report", help="one self-contained HTML report from results.json")
+    rp.add_argument("results", help="results.json written by probegen ingest")
+    rp.add_argument("-o", "--output", default="report.html", help="the HTML file")
+    rp.add_argument("--title", help="title of the report")
+    rp.set_defaults(func=_report)
     return parser
 
 

@@ -1,0 +1,141 @@
+"""``results.json`` → one self-contained HTML page.
+
+Everything is inline: the CSS, the viewer script, the SVG plots, the 3-D scenes as
+JSON.  The page loads nothing (no URL appears in it), so it can be mailed, archived
+and opened on a machine without network.  The same results give the same bytes:
+numbers have fixed decimals and nothing depends on the clock unless a ``generated``
+text is passed in.
+
+Templates: ``templates/report/`` (``report.html.j2`` with the includes ``guard.js.j2``,
+``style.css.j2``, ``viewer.js.j2``), found through ``probegen.resources``.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from probegen.errors import ProbegenError
+from probegen.report import sections
+from probegen.report.model import Characteristic, Results, read_results
+from probegen.report.numbers import fixed, signed
+from probegen.resources import template_text
+
+if TYPE_CHECKING:
+    import jinja2
+
+DECIMALS = 4
+"""Decimals of lengths in the tables, mm (as ``probegen ingest`` prints them)."""
+
+
+def render_report(results: Mapping[str, Any], *, title: str | None = None,
+                  generated: str | None = None, source: str = "results.json") -> str:
+    """The HTML report of ``results`` (a parsed ``results.json``).
+
+    Args:
+        results: the JSON document ``probegen ingest`` writes.
+        title: page title; default ``probegen report: <log file>``.
+        generated: a text for the footer (e.g. a timestamp); none by default, so the
+            page is byte-for-byte repeatable.
+        source: name of the results for error messages.
+
+    Returns:
+        The page, ``\\n`` line endings.
+
+    Raises:
+        ProbegenError: a key of ``results`` is malformed (message names its key path).
+    """
+    res = read_results(results, source)
+    page = _env().get_template("report.html.j2").render(
+        title=title or _default_title(res), results=res, status=overall_status(res),
+        views=sections.views(res),
+        form={f.id: sections.form_plots(f) for f in res.features},
+        calibration=sections.calibration(res), generated=generated)
+    return page.replace("\r\n", "\n")
+
+
+def write_report(results_json_path: str | Path, out_path: str | Path, *,
+                 title: str | None = None) -> Path:
+    """Read ``results.json``, write the report page, return its path.
+
+    Raises:
+        ProbegenError: the file cannot be read or is not a results document.
+    """
+    src, out = Path(results_json_path), Path(out_path)
+    try:
+        doc = json.loads(src.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ProbegenError(f"{src}: cannot read the results: {exc.strerror}") from exc
+    except json.JSONDecodeError as exc:
+        raise ProbegenError(f"{src}:{exc.lineno}:{exc.colno}: expected results JSON, "
+                            f"found invalid JSON ({exc.msg})") from exc
+    page = render_report(doc, title=title, source=str(src))
+    out.write_text(page, encoding="utf-8", newline="\n")
+    return out
+
+
+def overall_status(res: Results) -> str:
+    """``OK``, ``NOT OK`` or ``not toleranced`` over all features."""
+    checks = [f.ok for f in res.features if f.ok is not None]
+    if not checks:
+        return "not toleranced"
+    return "OK" if all(checks) else "NOT OK"
+
+
+def _default_title(res: Results) -> str:
+    return f"probegen report: {res.source}" if res.source else "probegen report"
+
+
+@functools.cache
+def _env() -> jinja2.Environment:
+    """The page's Jinja environment: autoescaped, strict about undefined names."""
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.FunctionLoader(lambda name: template_text("report", name)),
+        undefined=jinja2.StrictUndefined, autoescape=True, keep_trailing_newline=True,
+        trim_blocks=True, lstrip_blocks=True)
+    env.filters.update(mm=mm, dev=deviation, tol=tolerance, status=status,
+                       status_class=status_class, trusted=_markup)
+    return env
+
+
+def _markup(text: str) -> Any:
+    """Trusted text made here (SVG, JSON) inserted as is."""
+    import markupsafe
+
+    return markupsafe.Markup(text)
+
+
+def mm(value: float) -> str:
+    """A length in the table, mm."""
+    return fixed(value, DECIMALS)
+
+
+def deviation(value: float) -> str:
+    """A deviation in the table, signed, mm."""
+    return signed(value, DECIMALS)
+
+
+def tolerance(c: Characteristic) -> str:
+    """The tolerance zone of a characteristic: ``−a / +b``, ``≤ b``, ``≥ a`` or ``–``."""
+    if c.lower is None and c.upper is None:
+        return "\u2013"
+    if c.lower is None:
+        return f"\u2264 {deviation(c.upper or 0.0)}"
+    if c.upper is None:
+        return f"\u2265 {deviation(c.lower)}"
+    return f"{deviation(c.lower)} / {deviation(c.upper)}"
+
+
+def status(ok: bool | None) -> str:
+    """``OK``, ``NOT OK`` or ``–`` (not toleranced)."""
+    return "\u2013" if ok is None else ("OK" if ok else "NOT OK")
+
+
+def status_class(ok: bool | None) -> str:
+    """CSS class colouring a status."""
+    return "none" if ok is None else ("ok" if ok else "nok")
