@@ -228,6 +228,39 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     return cad.load_step(args.part), load_profile(args.machine).probe.ball_radius
 
 
+def _qif(args: argparse.Namespace) -> int:
+    from probegen.qif import dmis_output_to_qif, ingested_to_qif, write_qif
+    from probegen.sim.vm import program_kind
+
+    if program_kind(args.input) == "dmis":
+        from probegen.qif_dmis import read_dmis_tolerances
+        from probegen.results import read_dmis_output
+
+        out = read_dmis_output(args.input, strict=args.strict)
+        limits = None
+        if args.program:
+            text = Path(args.program).read_text(encoding="utf-8", errors="replace")
+            limits = read_dmis_tolerances(text, source=args.program)
+        export = dmis_output_to_qif(out, tolerances=limits)
+        text, notes = export.text, export.notes
+    else:
+        from probegen.compensate import load_calibration
+        from probegen.ingest import ingest
+        from probegen.spec import load_spec
+
+        if not args.spec:
+            raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
+        spec = load_spec(args.spec)
+        cal = load_calibration(args.calibration) if args.calibration else None
+        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal),
+                                      spec=spec), ()
+    path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
+    for note in notes:
+        print(f"note: {note}")
+    print(f"wrote {path}{' (valid against the QIF 3 schema)' if args.validate else ''}")
+    return ExitCode.OK
+
+
 def _report(args: argparse.Namespace) -> int:
     from probegen.report import write_report
 
@@ -311,6 +344,17 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--pty-delay", type=float, default=1.0,
                     help="seconds to wait for the reader before sending (1)")
     sm.set_defaults(func=_sim)
+
+    q = sub.add_parser("qif", help="QIF 3 results from a DPRNT log or a DMIS output file")
+    q.add_argument("input", help="DPRNT log (with --spec) or DMIS output (.dms/.dmi)")
+    q.add_argument("--spec", help="the spec a DPRNT log's program was compiled from")
+    q.add_argument("--calibration", help="probe calibration to compensate with")
+    q.add_argument("--program", help="the DMIS program, for its T() tolerance limits")
+    q.add_argument("--strict", action="store_true", help="refuse output with diagnostics")
+    q.add_argument("--validate", action="store_true", help="validate against the schema")
+    q.add_argument("--schema", help="QIFDocument.xsd (default: $PROBEGEN_QIF_SCHEMA)")
+    q.add_argument("-o", "--output", default="results.qif", help="the QIF file")
+    q.set_defaults(func=_qif)
 
     rp = sub.add_parser("report", help="one self-contained HTML report from results.json")
     rp.add_argument("results", help="results.json written by probegen ingest")

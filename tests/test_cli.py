@@ -49,3 +49,21 @@ def test_unknown_dialect(in_repo: Path, capsys: pytest.CaptureFixture[str]) -> N
     code = main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanc", "-o", "-"])
     assert code == ExitCode.UNSUPPORTED
     assert "did you mean 'fanuc'" in capsys.readouterr().err
+
+
+def test_qif_from_the_sample_log_validates(in_repo: Path, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    from conftest import SHARED
+
+    out = tmp_path / "r.qif"
+    code = main(["qif", "samples/sphere25/sphere_test.log", "--spec",
+                 "samples/sphere25/sphere_test.toml", "-o", str(out), "--validate",
+                 "--schema", str(SHARED / "ref/qif/schema/QIFDocument.xsd")])
+    assert code == ExitCode.OK
+    assert "valid against the QIF 3 schema" in capsys.readouterr().out
+    assert "<SphereFeatureMeasurement" in out.read_text()
+
+
+def test_qif_needs_a_spec_for_a_log(in_repo: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["qif", "samples/sphere25/sphere_test.log", "-o", "-"]) == ExitCode.ERROR
+    assert "needs --spec" in capsys.readouterr().err

@@ -1,0 +1,137 @@
+"""QIF characteristics: one checked quantity as definition, nominal, item and measurement.
+
+QIF splits a characteristic in four linked records: the *definition* (the tolerance),
+the *nominal* (the target value, linked to the feature nominal), the *item* (the
+instance checked on the part, linked to the feature item and the measuring device) and,
+in the results, the *measurement* (the value and its status, linked to the measured
+feature).  :func:`add_characteristic` writes all four from one :class:`Check`.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+from probegen.qif_xml import QifBuilder, num, ref_list, sub
+
+SIZE_KINDS = frozenset({"Diameter", "SphericalDiameter"})
+"""Size characteristics: a target value and a bilateral tolerance on the deviation."""
+
+ZONE_KINDS = frozenset({"Flatness", "Cylindricity", "Circularity", "Sphericity", "Position"})
+"""Geometric characteristics: a tolerance zone (QIF requires its value)."""
+
+ZONE_SHAPES = ("SphericalZone", "DiametricalZone")
+"""Position zone shapes written (a sphere's centre: spherical; an axis: diametrical)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Check:
+    """One characteristic to write; lengths in mm.
+
+    Attributes:
+        kind: the QIF name stem, one of :data:`SIZE_KINDS` or :data:`ZONE_KINDS`.
+        name: the characteristic item's name (``SPH1 D``, ``TOL4``).
+        value: the measured value: the actual size, the form, or the position deviation
+            as a zone diameter.
+        status: ``PASS``, ``FAIL`` or ``UNDEFINED`` (not toleranced).
+        target: the nominal size (size kinds).
+        lower: lowest allowed deviation from ``target`` (size kinds), or None.
+        upper: highest allowed deviation (size kinds), or None; both None: measured only.
+        zone: the tolerance zone (zone kinds).
+        zone_shape: the position zone, one of :data:`ZONE_SHAPES`.
+        material: the position's material condition (QIF ``MaterialModifierEnum``).
+    """
+
+    kind: str
+    name: str
+    value: float
+    status: str
+    target: float | None = None
+    lower: float | None = None
+    upper: float | None = None
+    zone: float | None = None
+    zone_shape: str = "DiametricalZone"
+    material: str = "NONE"
+
+
+@dataclass(frozen=True, slots=True)
+class Links:
+    """The records a characteristic points at (None: not written)."""
+
+    feature_nominal: int | None = None
+    feature_item: int | None = None
+    feature_measurement: int | None = None
+    device: int | None = None
+
+
+def status(ok: bool | None) -> str:
+    """QIF ``CharacteristicStatusEnum`` of a verdict: PASS, FAIL, or UNDEFINED (no limits)."""
+    return "UNDEFINED" if ok is None else ("PASS" if ok else "FAIL")
+
+
+def add_characteristic(b: QifBuilder, check: Check, links: Links = Links()) -> int:
+    """Write ``check`` as definition, nominal, item and measurement; return the nominal's
+    id (a part lists its characteristic nominals)."""
+    definition = _definition(b, check)
+    nominal = _nominal(b, check, definition, links)
+    item = _item(b, check, nominal, links)
+    _measurement(b, check, item, links)
+    b.statuses.append(check.status)
+    return nominal
+
+
+def _definition(b: QifBuilder, check: Check) -> int:
+    element, ident = b.add("CharacteristicDefinitions", f"{check.kind}CharacteristicDefinition")
+    if check.kind in SIZE_KINDS:
+        _size_tolerance(element, check)
+        return ident
+    if check.zone is None:
+        raise ValueError(f"{check.kind} {check.name}: a zone characteristic needs its zone")
+    sub(element, "ToleranceValue", num(check.zone))
+    if check.kind == "Position":
+        sub(element, "MaterialCondition", check.material)
+        sub(sub(element, "ZoneShape"), check.zone_shape)
+    return ident
+
+
+def _size_tolerance(element: ET.Element, check: Check) -> None:
+    if check.lower is None and check.upper is None:
+        sub(element, "NonTolerance", "MEASURED")
+        return
+    tolerance = sub(element, "Tolerance")
+    if check.upper is not None:
+        sub(tolerance, "MaxValue", num(check.upper))
+    if check.lower is not None:
+        sub(tolerance, "MinValue", num(check.lower))
+    sub(tolerance, "DefinedAsLimit", "false")
+
+
+def _nominal(b: QifBuilder, check: Check, definition: int, links: Links) -> int:
+    element, ident = b.add("CharacteristicNominals", f"{check.kind}CharacteristicNominal")
+    sub(element, "CharacteristicDefinitionId", str(definition))
+    if links.feature_nominal is not None:
+        ref_list(element, "FeatureNominalIds", [links.feature_nominal])
+    if check.kind in SIZE_KINDS and check.target is not None:
+        sub(element, "TargetValue", num(check.target))
+    return ident
+
+
+def _item(b: QifBuilder, check: Check, nominal: int, links: Links) -> int:
+    element, ident = b.add("CharacteristicItems", f"{check.kind}CharacteristicItem")
+    sub(element, "Name", check.name)
+    if links.feature_item is not None:
+        ref_list(element, "FeatureItemIds", [links.feature_item])
+    if links.device is not None:
+        ref_list(element, "MeasurementDeviceIds", [links.device])
+    sub(element, "CharacteristicNominalId", str(nominal))
+    return ident
+
+
+def _measurement(b: QifBuilder, check: Check, item: int, links: Links) -> None:
+    tag = f"{check.kind}CharacteristicMeasurement"
+    element, _ = b.add("CharacteristicMeasurements", tag)
+    sub(sub(element, "Status"), "CharacteristicStatusEnum", check.status)
+    sub(element, "CharacteristicItemId", str(item))
+    if links.feature_measurement is not None:
+        ref_list(element, "FeatureMeasurementIds", [links.feature_measurement])
+    sub(element, "Value", num(check.value))
