@@ -14,7 +14,7 @@ from probegen.spec import load_spec
 
 SPECS = sorted(p for p in (REPO / "samples").glob("*/*.toml")
                if "[[feature]]" in p.read_text(encoding="utf-8"))
-DIALECTS = ("fanuc", "dmis")
+DIALECTS = ("fanuc", "dmis", "linuxcnc", "haas")
 
 
 def generate(spec_path: Path, dialect_name: str) -> str:

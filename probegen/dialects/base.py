@@ -41,6 +41,8 @@ class Dialect:
     """Registry name, also the folder under ``templates/``."""
     EXTENSION: ClassVar[str] = ".txt"
     """File extension of emitted programs."""
+    TEMPLATES: ClassVar[str] = ""
+    """Folder under ``templates/`` (default: ``NAME``); a variant may reuse its parent's."""
     DECIMALS: ClassVar[dict[str, int]] = {"mm": 4, "inch": 5}
     """Decimals printed for lengths, by program units."""
     LINE_LENGTH: ClassVar[int] = 80
@@ -86,7 +88,8 @@ class Dialect:
     def env(self) -> jinja2.Environment:
         """The Jinja environment with this dialect's filters, strict about undefined names."""
         env = jinja2.Environment(
-            loader=jinja2.FunctionLoader(lambda name: template_text(self.NAME, name)),
+            loader=jinja2.FunctionLoader(
+                lambda name: template_text(self.TEMPLATES or self.NAME, name)),
             undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
             trim_blocks=True, lstrip_blocks=True, autoescape=False,
         )

@@ -95,7 +95,7 @@ class Fanuc(Dialect):
         self.base = s.variable_base
         self.setup = s
         nodes = ir.walk(program.body)
-        self.owners = _owners(nodes)
+        self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
         blocks = [self.block(node) for node in nodes]
         return {
@@ -169,7 +169,7 @@ class Fanuc(Dialect):
         return {"kind": "assign", "var": self.var(node.name), "value": value}
 
 
-def _owners(nodes: list[ir.Node]) -> dict[int, str]:
+def feature_owners(nodes: list[ir.Node]) -> dict[int, str]:
     """For each node (by id), the feature it serves: that of the next touch, else the last.
 
     A protected move that stops on an unexpected trigger prints this feature and the

@@ -1,0 +1,62 @@
+"""Haas (classic and Next Generation Control): Fanuc Macro B with a few differences.
+
+A Haas mill runs the Fanuc dialect's program text as it is: ``G31`` with the skip
+position in ``#5061-#5063``, ``IF [...] GOTO``, ``#3000`` alarms, ``POPEN``/``DPRNT``/
+``PCLOS``, ``G43 H``.  This class overrides only what differs for our programs; each
+override names the Haas fact behind it (``docs/dialects.md`` says which were checked
+against a published copy of the Haas manual and which are from its G-code list as we
+know it: G100, G15).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar
+
+from probegen import ir
+from probegen.dialects.fanuc import SCRATCH, Fanuc
+from probegen.errors import UnsupportedError
+
+
+class Haas(Fanuc):
+    """Haas mill G-code (Fanuc Macro B compatible)."""
+
+    NAME: ClassVar[str] = "haas"
+    EXTENSION: ClassVar[str] = ".haas.nc"
+    """Haas reads ``.nc`` files; the inner suffix keeps them apart from Fanuc output."""
+    TEMPLATES: ClassVar[str] = "fanuc"
+    """The program text is Fanuc Macro B: the templates are Fanuc's."""
+    RESET_CODES: ClassVar[dict[str, str | None]] = {"G15": None, "G50.1": "G100"}
+    """Haas mill G-code list: no polar-coordinate mode (G15/G16), and mirror image is
+    cancelled with G100 (G101 sets it), not G50.1."""
+    RESERVED_VARIABLES: ClassVar[tuple[tuple[int, int, str], ...]] = (
+        (550, 599, "probe calibration data"), (700, 749, "hidden, for internal use"))
+    """Haas macro variable table: ranges a program must not write (calibration of the
+    WIPS probe; #709 is the fixture-clamp input).  #150-#199 hold probe results when a
+    probe is installed: writing them only overwrites the last results."""
+
+    def lower(self, program: ir.Program) -> dict[str, Any]:
+        self.check_variables(program.setup.variable_base)
+        context = super().lower(program)
+        s: ir.Setup = context["s"]
+        context["s"] = dataclasses.replace(s, reset_codes=self.reset_codes(s.reset_codes))
+        return context
+
+    def reset_codes(self, codes: tuple[str, ...]) -> tuple[str, ...]:
+        """The profile's reset codes in Haas words (see ``RESET_CODES``)."""
+        words = (self.RESET_CODES.get(code, code) for code in codes)
+        return tuple(word for word in words if word is not None)
+
+    def check_variables(self, base: int) -> None:
+        """Refuse a variable range that overlaps one Haas reserves.
+
+        Raises:
+            UnsupportedError: the range ``#base-#base+93`` meets ``RESERVED_VARIABLES``.
+        """
+        last = base + SCRATCH + 3
+        for first_reserved, last_reserved, what in self.RESERVED_VARIABLES:
+            if base <= last_reserved and first_reserved <= last:
+                raise UnsupportedError(
+                    f"dialect {self.NAME!r} cannot use variables #{base}-#{last}: Haas keeps "
+                    f"#{first_reserved}-#{last_reserved} for {what}; set [controller] "
+                    f"variable_base to 100, 600 or 800")

@@ -1,0 +1,207 @@
+"""LinuxCNC (rs274ngc), as run by LinuxCNC 2.9 and its standalone interpreter ``rs274``.
+
+Conventions this dialect follows (see ``docs/dialects.md`` and the LinuxCNC G-code
+reference):
+
+* Header: ``%``, the program number and name as a comment (an ``o`` word is flow control
+  in rs274ngc, not a program number), units, ``G90`` and the profile's reset codes
+  translated by ``RESET_CODES`` (LinuxCNC has no programmed rotation, polar mode,
+  mirror image or scaling to cancel), ``G61`` exact path, the probe tool and work offset,
+  a check that no G92/G52 offset is applied (``#5210``; the program aborts rather than
+  measure in a shifted frame), ``G43 H``, the probe-on codes, ``(LOGAPPEND,...)`` and the
+  ``PGSTART`` line.  The work offset's own XY rotation (``G10 L2 R``) is part of the frame
+  the operator set, like its origin, and is kept.
+* ``RAPID`` moves are ``G0`` (a straight line on LinuxCNC).
+* ``PROTECTED`` moves are ``G38.3`` at the positioning feed; if the probe tripped
+  (``#5070`` = 1) the program logs ``ERR COLLISION <feature> <move>`` and stops with
+  ``(ABORT,UNEXPECTED PROBE TRIGGER ...)``.
+* Touches are ``G38.2`` at the probing feed to ``overtravel`` past the nominal contact:
+  LinuxCNC itself stops the program with an error if the probe never trips, so a missed
+  touch leaves a log without ``ERR NOTOUCH`` and without ``PGEND`` (an incomplete log).
+* ``RETRACT`` moves are ``G1`` back along the approach line.
+* A move to the point the previous move ended at is dropped (rs274ngc calls a probe
+  move that starts at its end point an error); it still counts in the move numbers of
+  ``ERR COLLISION``, which stay those of the Fanuc program.
+* Results are ``(LOG,...)`` lines in the line format of ``docs/dprnt-format.md``, the
+  probe position printed as ``%.4f#5061`` (``%.5f`` in inch), so
+  :func:`probegen.results.parse_dprnt` reads the log as it is.
+* Run-time values are global named parameters ``#<_pg_name>``; ``variable_base`` is not
+  used (numbered parameters would share the operator's ``#31-#5000``).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any, ClassVar
+
+from probegen import ir
+from probegen.constants import tol
+from probegen.dialects.base import Dialect
+from probegen.dialects.fanuc import feature_owners
+
+_ACTIVE_COMMENT = re.compile(
+    r"\s*(MSG|DEBUG|PRINT|LOG|LOGOPEN|LOGAPPEND|LOGCLOSE|PROBEOPEN|PROBECLOSE|ABORT|PY)\b",
+    re.IGNORECASE)
+"""Comments that rs274ngc acts on (message, log, probe log, abort, Python)."""
+
+
+class LinuxCnc(Dialect):
+    """LinuxCNC rs274ngc G-code."""
+
+    NAME: ClassVar[str] = "linuxcnc"
+    EXTENSION: ClassVar[str] = ".ngc"
+    LINE_LENGTH: ClassVar[int] = 255
+    """rs274ngc reads at most 256 characters a line, the end of line included."""
+    RUNTIME_VARIABLES: ClassVar[bool] = True
+    UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
+    """The G code for each unit system."""
+    RESET_CODES: ClassVar[dict[str, str | None]] = {
+        "G69": None, "G15": None, "G50.1": None, "G50": None}
+    """Fanuc reset codes whose mode does not exist on LinuxCNC (rotation is only the work
+    offset's R, polar coordinates are per word, no mirror image, no scaling): dropped."""
+    MODAL_CODES: ClassVar[frozenset[str]] = frozenset({
+        "G7", "G8", "G17", "G18", "G19", "G17.1", "G18.1", "G19.1", "G20", "G21", "G40",
+        "G49", "G61", "G61.1", "G64", "G80", "G90", "G90.1", "G91.1", "G93", "G94", "G95",
+        "G97", "G98", "G99"})
+    """Reset codes rs274ngc accepts on their own; any other is refused, not emitted."""
+    PATH_MODE: ClassVar[str] = "G61"
+    """Exact path: under G64, LinuxCNC's default, consecutive moves are blended and the
+    corners the collision check cleared are cut."""
+    PARAM_PREFIX: ClassVar[str] = "_pg_"
+    """Prefix of the global named parameters (never a predefined name such as ``_x``)."""
+    LOG_FILE: ClassVar[str] = "probegen-{number}.log"
+    """The log file (LOGAPPEND: a rerun adds a run, as a DPRNT capture appends)."""
+    FEED_DECIMALS: ClassVar[dict[str, int]] = {"mm": 0, "inch": 1}
+    """Decimals of F words, by program units."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.params: dict[str, str] = {}
+        self.label = 1000
+        self.position: ir.Point | None = None
+
+    # -- values -----------------------------------------------------------------
+    def param(self, name: str) -> str:
+        """The named parameter holding run-time value ``name``."""
+        if name not in self.params:
+            word = self.PARAM_PREFIX + re.sub(r"[^a-z0-9]+", "_", name.lower())
+            if word in self.params.values():
+                raise self.unsupported(ir.Var(name), f"two run-time values named {word}")
+            self.params[name] = word
+        return f"#<{self.params[name]}>"
+
+    def expr(self, c: ir.Coord) -> str:
+        """A coordinate as a number, a parameter or a bracketed expression."""
+        if not isinstance(c, ir.Var):
+            return self.length(c)
+        if abs(c.offset) < tol.zero:
+            return self.param(c.name)
+        sign = "-" if c.offset < 0 else "+"
+        return f"[{self.param(c.name)}{sign}{self.length(abs(c.offset))}]"
+
+    def feed(self, mm_per_min: float) -> str:
+        """A feed in program units per minute."""
+        return self.num(self.scale(mm_per_min), self.FEED_DECIMALS[self.units])
+
+    def log_number(self, word: str) -> str:
+        """``word`` (``#5061``, ``#<_pg_x>``) as a LOG field with the program's decimals."""
+        return f"%.{self.DECIMALS[self.units]}f{word}"
+
+    def next_label(self) -> int:
+        """A fresh o-word number for an ``if`` block."""
+        self.label += 1
+        return self.label
+
+    def reset_codes(self, codes: tuple[str, ...]) -> list[str]:
+        """The profile's reset codes as rs274ngc accepts them (see ``RESET_CODES``)."""
+        out = []
+        for code in codes:
+            word = self.RESET_CODES.get(code, code)
+            if word is None:
+                continue
+            if word not in self.MODAL_CODES:
+                raise self.unsupported(ir.Comment(code), "not a LinuxCNC modal code")
+            out.append(word)
+        return out
+
+    def comment(self, text: str) -> str:
+        """Comment text rs274ngc reads as a plain comment (no nesting, never active)."""
+        text = text.upper().replace("(", "[").replace(")", "]")
+        return "NOTE " + text if _ACTIVE_COMMENT.match(text) else text
+
+    # -- lowering -----------------------------------------------------------------
+    def lower(self, program: ir.Program) -> dict[str, Any]:
+        s = program.setup
+        self.setup = s
+        nodes = ir.walk(program.body)
+        self.owners = feature_owners(nodes)
+        self.moves: dict[str, int] = {}
+        offset_check = self.next_label()
+        return {
+            "s": s, "units_code": self.UNITS_CODE[s.units],
+            "reset": " ".join(["G90", *self.reset_codes(s.reset_codes), self.PATH_MODE]),
+            "offset_check": offset_check, "blocks": [self.block(n) for n in nodes],
+            "ball": self.length(s.ball_diameter), "clearance": self.length(s.clearance_z),
+            "name": self.comment(s.program_name),
+            "log": self.LOG_FILE.format(number=s.program_number),
+        }
+
+    def block(self, node: ir.Node) -> dict[str, Any]:
+        """One IR node as the values its template macro prints."""
+        if isinstance(node, ir.Comment):
+            return {"kind": "comment", "text": self.comment(node.text)}
+        if isinstance(node, ir.FeatureBlock):
+            f = node.feature
+            return {"kind": "comment",
+                    "text": self.comment(f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}")}
+        if isinstance(node, ir.Move):
+            block = self.move(node, self.owners[id(node)])
+            self.position = node.target
+            return block
+        self.position = None  # after a touch, where it tripped; after an Assign, maybe moved
+        if isinstance(node, ir.Touch):
+            return self.touch(node)
+        if isinstance(node, ir.Assign):
+            return self.assign(node)
+        if isinstance(node, ir.ReportCentre):
+            return self.centre(node)
+        raise self.unsupported(node, "no run-time frames; use run-time variables instead")
+
+    def move(self, node: ir.Move, feature: str) -> dict[str, Any]:
+        xyz = [self.expr(c) for c in node.target]
+        f = self.feed(self.setup.position_feed)
+        if node.mode is ir.MoveMode.PROTECTED:
+            self.moves[feature] = self.moves.get(feature, 0) + 1
+        if node.target == self.position:
+            return {"kind": "none"}
+        if node.mode is ir.MoveMode.RAPID:
+            return {"kind": "rapid", "xyz": xyz}
+        if node.mode is ir.MoveMode.RETRACT:
+            return {"kind": "retract", "xyz": xyz, "f": f}
+        return {"kind": "protected", "xyz": xyz, "f": f, "feature": feature,
+                "index": self.moves[feature], "label": self.next_label()}
+
+    def touch(self, node: ir.Touch) -> dict[str, Any]:
+        k = self.setup.ball_diameter / 2.0 - node.overtravel
+        end = [c + k * n for c, n in zip(node.contact, node.normal, strict=True)]
+        stores = [f"{self.param(name)} = #{5061 + axis}"
+                  for axis, name in enumerate(node.store) if name is not None]
+        return {"kind": "touch", "xyz": [self.expr(c) for c in end],
+                "f": self.feed(self.setup.probe_feed), "stores": stores,
+                "tag": node.role.value, "feature": node.feature, "index": node.index,
+                "log": [self.log_number(f"#{5061 + axis}") for axis in range(3)]}
+
+    def assign(self, node: ir.Assign) -> dict[str, Any]:
+        if node.b is not None:
+            value = f"[[{self.expr(node.a)}+{self.expr(node.b)}]/2]"
+        else:
+            value = self.expr(node.a + node.offset)
+        return {"kind": "assign", "var": self.param(node.name), "value": value}
+
+    def centre(self, node: ir.ReportCentre) -> dict[str, Any]:
+        log = []
+        for c in node.centre:
+            if not isinstance(c, ir.Var) or c.offset:
+                raise self.unsupported(node, "LOG prints plain parameters only")
+            log.append(self.log_number(self.param(c.name)))
+        return {"kind": "centre", "feature": node.feature, "log": log}
