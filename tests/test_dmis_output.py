@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from mutations import mutate
 from test_dprnt import CLEAN, HEAD, MALFORMED, NOISE_MOVING_LINES, NOISE_SAME_LINES, STRUCTURE
 
 from probegen.dmis import logical_statements, parse_dmis, parse_dmis_recovering
@@ -401,18 +402,10 @@ SEED_OUTPUT = (
 @st.composite
 def mutated_output(draw: st.DrawFn) -> str:
     """The NIST output file (read in place) or a hand-written output, mutated."""
-    text = list(SIMPLE_OUT.read_text() if SIMPLE_OUT.is_file() else SEED_OUTPUT)
+    text = SIMPLE_OUT.read_text() if SIMPLE_OUT.is_file() else SEED_OUTPUT
     if draw(st.booleans()):
-        text = list(SEED_OUTPUT)
-    for _ in range(draw(st.integers(1, 8))):
-        pos = draw(st.integers(0, len(text)))
-        op = draw(st.sampled_from(["insert", "delete", "replace"]))
-        char = draw(st.sampled_from(ALPHABET))
-        if op == "insert":
-            text.insert(pos, char)
-        elif pos < len(text):
-            text[pos : pos + 1] = [] if op == "delete" else [char]
-    return "".join(text)
+        text = SEED_OUTPUT
+    return mutate(draw, text, ALPHABET)
 
 
 @FUZZ

@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from mutations import mutate
 
 from probegen.errors import Diagnostic, ProbegenError, ResultsParseError
 from probegen.results import (
@@ -403,16 +404,7 @@ def test_random_bytes_never_crash(data: bytes) -> None:
 
 @st.composite
 def mutated_log(draw: st.DrawFn) -> str:
-    text = list(CLEAN)
-    for _ in range(draw(st.integers(1, 8))):
-        pos = draw(st.integers(0, len(text)))
-        op = draw(st.sampled_from(["insert", "delete", "replace"]))
-        char = draw(st.sampled_from(ALPHABET))
-        if op == "insert":
-            text.insert(pos, char)
-        elif pos < len(text):
-            text[pos : pos + 1] = [] if op == "delete" else [char]
-    return "".join(text)
+    return mutate(draw, CLEAN, ALPHABET)
 
 
 @FUZZ
