@@ -79,9 +79,58 @@ def _target(out: Path, stem: str, ext: str, count: int) -> Path:
 def _features(args: argparse.Namespace) -> int:
     from probegen import cad
 
-    table = cad.features_table(cad.load_step(args.model))
+    model = cad.load_step(args.model)
+    if args.revolved:
+        from probegen.cad.revolved import revolved_features, revolved_table
+
+        table = revolved_table(revolved_features(model))
+    else:
+        table = cad.features_table(model)
     sys.stdout.write(table if table.endswith("\n") else table + "\n")
     return ExitCode.OK
+
+
+def _plan(args: argparse.Namespace) -> int:
+    from probegen.planning import plan_program
+    from probegen.planning.revolved_spec import all_revolved, metrics_table
+    from probegen.spec import Spec, load_spec
+
+    notes: tuple[str, ...] = ()
+    if args.all_revolved:
+        from probegen.machine.profile import load_profile
+        from probegen.planning.collision import load_model
+
+        if not args.machine:
+            raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
+        machine = load_profile(args.machine)
+        top = load_model(args.input).bbox_max[2]
+        clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
+        features, notes = all_revolved(Path(args.input), machine, clearance)
+        if not features:
+            raise ProbegenError(f"{args.input}: expected an accessible revolved feature that "
+                                f"plans, found none; " + "; ".join(notes))
+        spec = Spec(source=args.input, model=Path(args.input), machine=machine,
+                    dialect=machine.dialect, clearance_z=clearance, program_number=1001,
+                    program_name="ALL REVOLVED", features=features)
+    else:
+        spec = load_spec(args.input)
+    planned = plan_program(spec, runtime_variables=True)
+    sys.stdout.write(metrics_table(planned.revolved, spec.machine))
+    for p in planned.sphere_tests:
+        print(f"{p.feature.id}: sphere test (M1), {len(p.directions)} points: not compared")
+    if planned.tour is not None:
+        print(f"order: {' '.join(p.spec.id for p in planned.revolved)}; travel at z = "
+              f"{spec.clearance_z:.1f}: {planned.tour.length:.1f} mm (nearest neighbour "
+              f"{planned.tour.nearest_length:.1f} mm)")
+    print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
+          f"clearance above the margin {planned.clearance.minimum:.3f} mm")
+    for note in notes:
+        print(f"note: {note}")
+    return ExitCode.OK
+
+
+CLEARANCE_ABOVE_MODEL = 10.0
+"""``plan --all-revolved``: the clearance plane is at least this far above the model, mm."""
 
 
 def _sphere_points(args: argparse.Namespace) -> int:
@@ -126,11 +175,15 @@ def _ingest(args: argparse.Namespace) -> int:
         print(f"diagnostic: {diag}")
     print(f"wrote {js} and {cs}")
     if args.write_calibration:
+        if not result.results:
+            raise ProbegenError("--write-calibration: expected a sphere test in the spec, "
+                                "found none")
         target = Path(args.write_calibration)
         target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
                           encoding="utf-8", newline="\n")
         print(f"wrote the probe calibration {target}")
-    failed = any(r.ok is False for r in result.results)
+    failed = any(r.ok is False for r in result.results) or any(
+        r.ok is False for r in result.revolved)
     return ExitCode.NOT_OK if failed else ExitCode.OK
 
 
@@ -214,14 +267,15 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     from probegen.machine.profile import load_profile
 
     if args.spec:
-        from probegen.spec import load_spec
+        from probegen.spec import SphereTest, load_spec
 
         spec = load_spec(args.spec)
         ball = spec.machine.probe.ball_radius
         if args.part or spec.model is not None:
             return cad.load_step(args.part or str(spec.model)), ball
-        centres = [f.centre for f in spec.features if f.centre is not None]
-        radii = [(f.diameter or 0.0) / 2.0 for f in spec.features if f.centre is not None]
+        spheres = [f for f in spec.features if isinstance(f, SphereTest) and f.centre]
+        centres = [f.centre for f in spheres]
+        radii = [(f.diameter or 0.0) / 2.0 for f in spheres]
         return (centres, radii), ball
     if not (args.part and args.machine):
         raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
@@ -289,7 +343,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     f = sub.add_parser("features", help="list the faces of a STEP model")
     f.add_argument("model", help="STEP file")
+    f.add_argument("--revolved", action="store_true",
+                   help="list the revolved features (cylinders, cones, spheres, tori) instead")
     f.set_defaults(func=_features)
+
+    pl = sub.add_parser("plan", help="plan a spec (or every revolved feature of a model) "
+                                     "and compare the M2 paths with the baseline")
+    pl.add_argument("input", help="feature spec (TOML), or a STEP model with --all-revolved")
+    pl.add_argument("--all-revolved", action="store_true",
+                    help="plan every accessible revolved feature of the model (default "
+                         "sections, 8 points)")
+    pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
+    pl.set_defaults(func=_plan)
 
     s = sub.add_parser("sphere-points", help="show a sphere-test layout and its figures")
     s.add_argument("--layout", choices=("iso", "octahedral", "cap"), default="octahedral")

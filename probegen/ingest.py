@@ -24,13 +24,17 @@ import numpy as np
 from probegen.compensate import ProbeCalibration, compensate
 from probegen.errors import ProbegenError
 from probegen.evaluate import SphereTestResult, evaluate_sphere_test
+from probegen.evaluate_revolved import RevolvedResult, evaluate_revolved
 from probegen.results import DprntLog, read_dprnt
-from probegen.spec import Spec
+from probegen.spec import RevolvedSpec, Spec
 
 Vec3 = tuple[float, float, float]
 
 MIN_POINTS = 5
 """Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
+REVOLVED_MIN_POINTS = {"circle": 4, "cylinder": 6}
+"""Fewest touches a circle (3 determine it; one more checks) or a cylinder is evaluated
+from."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,6 +48,7 @@ class Ingested:
         notes: problems found while matching (missing touches, alarms in the log).
         path: the planned stylus path at nominal, as (feature, kind, start, end) segments
             (kind: rapid, protected, or touch ...), for the report.
+        revolved: one evaluated result per circle or cylinder feature with touches.
     """
 
     source: str
@@ -51,6 +56,7 @@ class Ingested:
     results: tuple[SphereTestResult, ...]
     notes: tuple[str, ...]
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
+    revolved: tuple[RevolvedResult, ...] = ()
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
@@ -69,7 +75,13 @@ def ingest(log_path: str | Path, spec: Spec, *,
         notes.append("the log has no PGEND line: the program did not finish")
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
     results = []
+    revolved: list[RevolvedResult] = []
     for feature in spec.features:
+        if isinstance(feature, RevolvedSpec):
+            found_r = _revolved(feature, spec, touches, notes)
+            if found_r is not None:
+                revolved.append(found_r)
+            continue
         sphere = resolve_sphere(feature, spec.model)
         plan = plan_points(feature, sphere, spec.machine)
         found = [k for k in range(1, len(plan.directions) + 1) if (feature.id, k) in touches]
@@ -90,7 +102,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
             calibrated_diameter=sphere.diameter,
             ball_radius=r if isinstance(r, float) else r.effective_radius,
             form=tol.form, size=tol.size, position=tol.position))
-    if not results:
+    if not results and not revolved:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
@@ -99,7 +111,40 @@ def ingest(log_path: str | Path, spec: Spec, *,
 
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
-    return Ingested(str(log_path), log, tuple(results), tuple(notes), path)
+    return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved))
+
+
+def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
+              notes: list[str]) -> RevolvedResult | None:
+    """Evaluate a circle or cylinder from its touches (other kinds: a note)."""
+    from probegen.planning.revolved_spec import plan_revolved
+
+    if feature.kind not in REVOLVED_MIN_POINTS:
+        notes.append(f"feature {feature.id}: kind {feature.kind} is not evaluated yet")
+        return None
+    plan = plan_revolved(feature, spec.model, spec.machine, spec.clearance_z)
+    indices = sorted(plan.normals)
+    found = [k for k in indices if (feature.id, k) in touches]
+    missing = sorted(set(indices) - set(found))
+    if missing:
+        notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+    least = REVOLVED_MIN_POINTS[feature.kind]
+    sections = {plan.section_of_touch[k] for k in found}
+    if len(found) < least or feature.kind == "cylinder" and len(sections) < 2:
+        notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches in "
+                     f"{len(sections)} sections (at least {least} needed"
+                     f"{', in 2 sections' if feature.kind == 'cylinder' else ''})")
+        return None
+    d = plan.definition
+    centre = getattr(d, "centre", None)
+    axis = getattr(d, "axis", (0.0, 0.0, 1.0))
+    assert centre is not None and hasattr(d, "diameter")
+    tol = feature.tolerance
+    return evaluate_revolved(
+        feature.id, feature.kind, [touches[(feature.id, k)] for k in found], inner=d.inner,
+        ball_radius=spec.machine.probe.ball_radius, nominal_centre=centre,
+        nominal_axis=axis, nominal_diameter=d.diameter, diameter=tol.diameter,
+        position=tol.position, form=tol.form)
 
 
 def _ranges(numbers: list[int]) -> str:
@@ -124,7 +169,8 @@ def to_json(ing: Ingested) -> str:
         "complete": ing.log.complete,
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
-        "features": [_feature_json(r) for r in ing.results],
+        "features": [_feature_json(r) for r in ing.results]
+        + [_revolved_json(r) for r in ing.revolved],
         "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
                   "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
@@ -155,6 +201,29 @@ def _feature_json(r: SphereTestResult) -> dict[str, Any]:
     }
 
 
+def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
+    return {
+        "id": r.feature,
+        "kind": r.kind,
+        "ok": r.ok,
+        "n": len(r.points),
+        "centre": [_f(v) for v in r.centre],
+        "axis": [_f(v) for v in r.axis],
+        "diameter": _f(r.diameter),
+        "form": _f(r.form),
+        "characteristics": [
+            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
+             "deviation": _f(c.deviation),
+             "lower": None if c.lower is None else _f(c.lower),
+             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
+            for c in r.characteristics
+        ],
+        "points": [[_f(v) for v in p] for p in r.points],
+        "directions": [[_f(v) for v in d] for d in r.directions],
+        "residuals": [_f(v) for v in r.residuals],
+    }
+
+
 def _status(ok: bool | None) -> str:
     return "-" if ok is None else ("OK" if ok else "NOT OK")
 
@@ -173,7 +242,8 @@ def to_csv(ing: Ingested) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
                 "upper", "status"])
-    for r in ing.results:
+    rs: list[SphereTestResult | RevolvedResult] = [*ing.results, *ing.revolved]
+    for r in rs:
         for c in r.characteristics:
             w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                         f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
@@ -184,7 +254,8 @@ def to_csv(ing: Ingested) -> str:
 def to_table(ing: Ingested) -> str:
     """The table ``probegen ingest`` prints."""
     rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status")]
-    for r in ing.results:
+    rs: list[SphereTestResult | RevolvedResult] = [*ing.results, *ing.revolved]
+    for r in rs:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                          f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))

@@ -160,7 +160,43 @@ class SphereDef:
     inner: bool = False
 
 
-FeatureDef = SphereDef
+@dataclass(frozen=True, slots=True)
+class CircleDef:
+    """A nominal circle (DMIS ``FEAT/CIRCLE``): centre, axis (unit), diameter, mm."""
+
+    id: str
+    centre: Vec3
+    axis: Vec3
+    diameter: float
+    inner: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class CylinderDef:
+    """A nominal cylinder (DMIS ``FEAT/CYLNDR``): ``centre`` is the middle of the
+    measured length on the axis; axis (unit), diameter and length, mm."""
+
+    id: str
+    centre: Vec3
+    axis: Vec3
+    diameter: float
+    length: float
+    inner: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class ConeDef:
+    """A nominal cone (DMIS ``FEAT/CONE``): apex, axis (unit, towards the growing
+    radius), half angle (rad)."""
+
+    id: str
+    apex: Vec3
+    axis: Vec3
+    half_angle: float
+    inner: bool = False
+
+
+FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef
 
 
 @dataclass(frozen=True, slots=True)

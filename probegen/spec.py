@@ -28,11 +28,21 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     locate_uncertainty = 2.0       # how far the real centre may be from nominal
     tolerance = { form = 0.004, size = 0.004, position = 0.05 }   # optional limits, mm
 
+    [[feature]]                    # a revolved feature (method M2)
+    id = "BORE"
+    kind = "cylinder"              # circle | cylinder | cone | sphere
+    face = 8                       # or at = [x, y, z]: a face of the recognised feature
+    sections = [10.0, 40.0]        # depths below the feature's top end (default: recognised)
+    points = 8                     # per section
+    retract = 2.0                  # optional; the M2 safe distance
+    tolerance = { diameter = [0.0, 0.025], position = 0.05, form = 0.01 }
+
 Every problem is a ``SpecError`` naming the file, the key path and the value found.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,8 +54,12 @@ from probegen.tomlread import Table, load_toml
 
 Vec3 = tuple[float, float, float]
 
-FEATURE_KINDS = ("sphere_test",)
-"""Feature kinds this version plans (more arrive with methods M2 and M3)."""
+REVOLVED_KINDS = ("circle", "cylinder", "cone", "sphere")
+"""Revolved feature kinds (method M2), measured in sections of a model's surface."""
+FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS)
+"""Feature kinds this version plans (method M1: sphere_test; method M2: the rest)."""
+DEFAULT_POINTS = 8
+"""Default touches per section of a revolved feature."""
 
 SPHERE_LAYOUTS = ("iso", "octahedral", "cap")
 _ID = re.compile(r"[A-Z][A-Z0-9]{0,11}\Z")
@@ -101,7 +115,53 @@ class SphereTest:
     tolerance: SphereTolerance = SphereTolerance()
 
 
-Feature = SphereTest
+@dataclass(frozen=True, slots=True)
+class RevolvedTolerance:
+    """Limits for a revolved feature, mm; None = not checked.
+
+    Attributes:
+        diameter: lowest and highest allowed deviation of the fitted diameter.
+        position: diameter of the position zone about the nominal axis (ISO 1101: the
+            fitted centre may lie ``position / 2`` from nominal, measured square to
+            the axis).
+        form: limit of the form error (roundness for a circle, cylindricity for a
+            cylinder: the range of the radial residuals).
+    """
+
+    diameter: tuple[float, float] | None = None
+    position: float | None = None
+    form: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class RevolvedSpec:
+    """A revolved feature of the model measured in sections (method M2).
+
+    Attributes:
+        id: feature id.
+        where: ``file: feature[i]`` for error messages.
+        kind: ``circle``, ``cylinder``, ``cone`` or ``sphere``.
+        face: a model face id of the feature, or None.
+        at: a point near one of its faces, or None.
+        sections: depths (mm) of the sections below the feature's top end, measured
+            along Z (the feature's axis is vertical), or None for the default sections.
+        points: touches per section.
+        retract: the M2 safe distance ``d`` (mm), or None for the probe's approach.
+        tolerance: limits for pass/fail.
+    """
+
+    id: str
+    where: str
+    kind: str
+    face: int | None
+    at: Vec3 | None
+    sections: tuple[float, ...] | None
+    points: int
+    retract: float | None
+    tolerance: RevolvedTolerance = RevolvedTolerance()
+
+
+Feature = SphereTest | RevolvedSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,7 +259,8 @@ def _feature(t: Table, k: float) -> Feature:
     if kind not in FEATURE_KINDS:
         raise SpecError(f"{t.where('kind')}: expected one of {', '.join(FEATURE_KINDS)}, "
                         f"found {kind!r}{did_you_mean(kind, FEATURE_KINDS)}")
-    feature = _sphere_test(t, fid, k)
+    feature: Feature = (_sphere_test(t, fid, k) if kind == "sphere_test"
+                        else _revolved(t, fid, kind, k))
     t.done()
     return feature
 
@@ -241,3 +302,47 @@ def _sphere_tolerance(t: Table, k: float) -> SphereTolerance:
     values = {key: t.get_float(key, positive=True) for key in ("form", "size", "position")}
     t.done()
     return SphereTolerance(**{key: None if v is None else v * k for key, v in values.items()})
+
+
+def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
+    face = t.get_int("face", minimum=1)
+    at = _scaled(t.get_vec("at"), k)
+    given = [key for key, v in (("face", face), ("at", at)) if v is not None]
+    if len(given) != 1:
+        raise SpecError(f"{t.where('face')}: expected exactly one of face, at, "
+                        f"found {', '.join(given) or 'none'}")
+    sections = _depths(t, k)
+    if kind == "circle" and sections is not None and len(sections) != 1:
+        raise t.fail("sections", "one depth for a circle (use kind = \"cylinder\" for more)")
+    points = t.get_int("points", DEFAULT_POINTS, minimum=3, maximum=500) or DEFAULT_POINTS
+    retract = t.get_float("retract", positive=True)
+    return RevolvedSpec(
+        id=fid, where=f"{t.file}: {t.path}", kind=kind, face=face, at=at, sections=sections,
+        points=points, retract=None if retract is None else retract * k,
+        tolerance=_revolved_tolerance(t.table("tolerance"), k),
+    )
+
+
+def _depths(t: Table, k: float) -> tuple[float, ...] | None:
+    value = t.get_any("sections")
+    if value is None:
+        return None
+    ok = isinstance(value, list) and 1 <= len(value) <= 50 and all(
+        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+        and v >= 0.0 for v in value)
+    if not ok:
+        raise t.fail("sections", "an array of 1-50 depths >= 0 (mm below the feature's top)")
+    return tuple(float(v) * k for v in value)
+
+
+def _revolved_tolerance(t: Table, k: float) -> RevolvedTolerance:
+    diameter = None
+    if t.has("diameter"):
+        lo, hi = t.get_vec("diameter", 2) or (0.0, 0.0)
+        if lo > hi:
+            raise t.fail("diameter", "[lower, upper] deviations with lower <= upper")
+        diameter = (lo * k, hi * k)
+    values = {key: t.get_float(key, positive=True) for key in ("position", "form")}
+    t.done()
+    return RevolvedTolerance(diameter, **{key: None if v is None else v * k
+                                          for key, v in values.items()})

@@ -10,6 +10,7 @@ dropped probing move is a crash on a real machine.
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any, ClassVar
 
 import jinja2
@@ -76,6 +77,19 @@ class Dialect:
     def length(self, mm: float) -> str:
         """A length given in mm, printed in program units."""
         return self.num(self.scale(mm))
+
+    def feature_title(self, f: ir.FeatureDef) -> str:
+        """A one-line description of a feature for comments, e.g. ``FEATURE B1 CIRCLE
+        INNER D50.0000``."""
+        side = "INNER" if f.inner else "OUTER"
+        if isinstance(f, ir.SphereDef):
+            return f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}"
+        if isinstance(f, ir.CircleDef):
+            return f"FEATURE {f.id} CIRCLE {side} D{self.length(f.diameter)}"
+        if isinstance(f, ir.CylinderDef):
+            return (f"FEATURE {f.id} CYLINDER {side} D{self.length(f.diameter)} "
+                    f"L{self.length(f.length)}")
+        return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
 
     # -- errors ---------------------------------------------------------------------
     def unsupported(self, node: object, why: str) -> UnsupportedError:

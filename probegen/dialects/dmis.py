@@ -16,6 +16,7 @@ Conventions (see ``docs/dialects.md``):
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 from probegen import ir
@@ -91,11 +92,27 @@ class Dmis(Dialect):
                 steps.append({"kind": "comment", "text": n.text})
             elif not isinstance(n, ir.Move):
                 raise self.unsupported(n, "not inside a DMIS measurement")
+        word, feat = self.definition(f, node)
         return {
-            "kind": "feature", "id": f.id, "n": len(touches),
-            "side": "INNER" if f.inner else "OUTER",
-            "centre": self.point(f.centre, node), "diameter": self.length(f.diameter),
+            "kind": "feature", "id": f.id, "n": len(touches), "word": word, "feat": feat,
             "approach": self.length(approaches.pop()) if approaches else None,
             "search": self.length(overtravels.pop()) if overtravels else None,
             "steps": steps,
         }
+
+    def definition(self, f: ir.FeatureDef, node: object) -> tuple[str, str]:
+        """The MEAS word and the ``FEAT/`` text of a nominal feature."""
+        side = "INNER" if f.inner else "OUTER"
+        if isinstance(f, ir.SphereDef):
+            values = [*self.point(f.centre, node), self.length(f.diameter)]
+            return "SPHERE", ",".join(["SPHERE", side, "CART", *values])
+        if isinstance(f, ir.ConeDef):
+            ijk = [self.num(v, 6) for v in f.axis]
+            values = [*self.point(f.apex, node), *ijk,
+                      self.num(2.0 * math.degrees(f.half_angle), 6)]
+            return "CONE", ",".join(["CONE", side, "CART", *values])
+        ijk = [self.num(v, 6) for v in f.axis]
+        values = [*self.point(f.centre, node), *ijk, self.length(f.diameter)]
+        if isinstance(f, ir.CylinderDef):
+            return "CYLNDR", ",".join(["CYLNDR", side, "CART", *values, self.length(f.length)])
+        return "CIRCLE", ",".join(["CIRCLE", side, "CART", *values])

@@ -110,9 +110,7 @@ class Fanuc(Dialect):
         if isinstance(node, ir.Comment):
             return {"kind": "comment", "text": node.text.upper()}
         if isinstance(node, ir.FeatureBlock):
-            f = node.feature
-            return {"kind": "comment",
-                    "text": f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}"}
+            return {"kind": "comment", "text": self.feature_title(node.feature)}
         if isinstance(node, ir.Move):
             return self.move(node, self.owners[id(node)])
         if isinstance(node, ir.Touch):

@@ -151,9 +151,7 @@ class LinuxCnc(Dialect):
         if isinstance(node, ir.Comment):
             return {"kind": "comment", "text": self.comment(node.text)}
         if isinstance(node, ir.FeatureBlock):
-            f = node.feature
-            return {"kind": "comment",
-                    "text": self.comment(f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}")}
+            return {"kind": "comment", "text": self.comment(self.feature_title(node.feature))}
         if isinstance(node, ir.Move):
             block = self.move(node, self.owners[id(node)])
             self.position = node.target

@@ -14,8 +14,10 @@ from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
+from probegen.planning.order import Stop, Tour, order_stops
+from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
-from probegen.spec import Spec
+from probegen.spec import RevolvedSpec, Spec
 
 
 @dataclass(frozen=True, slots=True)
@@ -26,11 +28,15 @@ class PlannedProgram:
         program: the IR, ready for a dialect.
         sphere_tests: the M1 plans, one per sphere-test feature.
         clearance: the collision check's report (smallest clearance per segment).
+        revolved: the M2 plans of the revolved features, in measuring order.
+        tour: the order of the revolved features (travel at the clearance plane).
     """
 
     program: ir.Program
     sphere_tests: tuple[SphereTestPlan, ...]
     clearance: ClearanceReport
+    revolved: tuple[RevolvedPlan, ...] = ()
+    tour: Tour | None = None
 
 
 def make_setup(spec: Spec) -> ir.Setup:
@@ -69,19 +75,30 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     machine = spec.machine
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
+    revolved: list[RevolvedPlan] = []
     for feature in spec.features:
-        sphere = resolve_sphere(feature, spec.model)
-        p = plan_points(feature, sphere, machine)
-        plans.append(p)
-        if not feature.locate:
-            body += locate.measure_nominal(p, machine, spec.clearance_z)
-        elif runtime_variables:
-            body += locate.locate_runtime(p, machine, spec.clearance_z)
+        if isinstance(feature, RevolvedSpec):
+            revolved.append(plan_revolved(feature, spec.model, machine, spec.clearance_z))
         else:
-            body += locate.locate_frame(p, machine, spec.clearance_z)
+            sphere = resolve_sphere(feature, spec.model)
+            p = plan_points(feature, sphere, machine)
+            plans.append(p)
+            if not feature.locate:
+                body += locate.measure_nominal(p, machine, spec.clearance_z)
+            elif runtime_variables:
+                body += locate.locate_runtime(p, machine, spec.clearance_z)
+            else:
+                body += locate.locate_frame(p, machine, spec.clearance_z)
         if progress is not None:
             progress(1)
+    tour = None
+    if revolved:
+        stops = [Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
+        tour = order_stops(stops, clearance_z=spec.clearance_z)
+        revolved = [revolved[k] for k in tour.order]
+        for r in revolved:
+            body += revolved_nodes(r, machine, spec.clearance_z)
     program = ir.Program(make_setup(spec), tuple(body))
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
     report = check_program(program, obstacle, plans, machine, progress=progress)
-    return PlannedProgram(program, tuple(plans), report)
+    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour)

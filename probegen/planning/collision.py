@@ -181,6 +181,24 @@ class ClearanceReport:
         return min((min(s.ball, s.shank) for s in self.segments), default=float("inf"))
 
 
+@dataclass(frozen=True, slots=True)
+class Located:
+    """What the check needs of a feature: its id, nominal centre (mm) and how far the
+    real part may be from nominal there (mm; 0 when the work offset sets it up)."""
+
+    id: str
+    centre: tuple[float, float, float]
+    uncertainty: float = 0.0
+
+
+def located(item: Any) -> Located:
+    """A :class:`Located` from itself or from a sphere-test plan (``feature``, ``sphere``)."""
+    if isinstance(item, Located):
+        return item
+    f = item.feature
+    return Located(f.id, tuple(item.sphere.centre), f.locate_uncertainty if f.locate else 0.0)
+
+
 class _Walker:
     """Evaluates IR coordinates nominally, as the controller would at run time."""
 
@@ -188,10 +206,10 @@ class _Walker:
         self.values: dict[str, float] = {}
         self.frames: list[tuple[str, np.ndarray]] = []
         self.r = r
-        self.uncertainty = max(
-            (p.feature.locate_uncertainty for p in plans if p.feature.locate), default=0.0)
-        self.centres = {p.feature.id: np.array(p.sphere.centre) for p in plans}
-        self.centres.update({f"{p.feature.id}L": np.array(p.sphere.centre) for p in plans})
+        items = [located(p) for p in plans]
+        self.uncertainty = max((p.uncertainty for p in items), default=0.0)
+        self.centres = {p.id: np.array(p.centre) for p in items}
+        self.centres.update({f"{p.id}L": np.array(p.centre) for p in items})
 
     def value(self, c: ir.Coord) -> float:
         if isinstance(c, ir.Var):
@@ -220,7 +238,12 @@ class _Walker:
 def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                   machine: MachineProfile, *,
                   progress: Callable[[int], None] | None = None) -> ClearanceReport:
-    """Check every move of ``program``; raise ``CollisionError`` at the first bad one."""
+    """Check every move of ``program``; raise ``CollisionError`` at the first bad one.
+
+    ``plans`` are the located features: :class:`Located` records or sphere-test plans
+    (their id, nominal centre and locate uncertainty); features set up by the work
+    offset (revolved features) need none.
+    """
     setup = program.setup
     r = setup.ball_diameter / 2.0
     clear = machine.margin / 2.0
