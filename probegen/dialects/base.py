@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import jinja2
 
 from probegen import ir
-from probegen.constants import MM_PER_INCH
+from probegen.constants import MM_PER_INCH, tol
 from probegen.errors import UnsupportedError, did_you_mean
 from probegen.resources import template_text
 
@@ -90,6 +90,21 @@ class Dialect:
             return (f"FEATURE {f.id} CYLINDER {side} D{self.length(f.diameter)} "
                     f"L{self.length(f.length)}")
         return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
+
+    def var(self, name: str) -> str:
+        """How the program names run-time value ``name``; dialects with variables say."""
+        raise self.unsupported(ir.Var(name), "no run-time variables")
+
+    def sum_expr(self, c: ir.Coord) -> str | None:
+        """``ref+offset`` / ``ref-offset`` for a run-time coordinate (None for a number, the
+        bare reference when the offset is zero); the dialect brackets it as its syntax
+        needs."""
+        if not isinstance(c, ir.Var):
+            return None
+        if abs(c.offset) < tol.zero:
+            return self.var(c.name)
+        sign = "-" if c.offset < 0 else "+"
+        return f"{self.var(c.name)}{sign}{self.length(abs(c.offset))}"
 
     # -- errors ---------------------------------------------------------------------
     def unsupported(self, node: object, why: str) -> UnsupportedError:

@@ -64,12 +64,8 @@ class Fanuc(Dialect):
 
     def expr(self, c: ir.Coord) -> str:
         """A coordinate as a Macro B expression (no outer brackets)."""
-        if not isinstance(c, ir.Var):
-            return self.length(c)
-        if abs(c.offset) < tol.zero:
-            return self.var(c.name)
-        sign = "-" if c.offset < 0 else "+"
-        return f"{self.var(c.name)}{sign}{self.length(abs(c.offset))}"
+        e = self.sum_expr(c)
+        return self.length(c) if e is None else e  # type: ignore[arg-type]
 
     def addr(self, c: ir.Coord) -> str:
         """A coordinate as an address value: a number, ``#n`` or ``[expression]``."""

@@ -90,14 +90,16 @@ class LinuxCnc(Dialect):
             self.params[name] = word
         return f"#<{self.params[name]}>"
 
+    def var(self, name: str) -> str:
+        """The run-time value ``name`` as a named parameter (see :meth:`param`)."""
+        return self.param(name)
+
     def expr(self, c: ir.Coord) -> str:
         """A coordinate as a number, a parameter or a bracketed expression."""
-        if not isinstance(c, ir.Var):
-            return self.length(c)
-        if abs(c.offset) < tol.zero:
-            return self.param(c.name)
-        sign = "-" if c.offset < 0 else "+"
-        return f"[{self.param(c.name)}{sign}{self.length(abs(c.offset))}]"
+        e = self.sum_expr(c)
+        if e is None:
+            return self.length(c)  # type: ignore[arg-type]
+        return e if isinstance(c, ir.Var) and abs(c.offset) < tol.zero else f"[{e}]"
 
     def feed(self, mm_per_min: float) -> str:
         """A feed in program units per minute."""
