@@ -92,26 +92,16 @@ def _features(args: argparse.Namespace) -> int:
 
 def _plan(args: argparse.Namespace) -> int:
     from probegen.planning import plan_program
-    from probegen.planning.revolved_spec import all_revolved, metrics_table
-    from probegen.spec import Spec, load_spec
+    from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
+    from probegen.spec import load_spec
 
     notes: tuple[str, ...] = ()
     if args.all_revolved:
         from probegen.machine.profile import load_profile
-        from probegen.planning.collision import load_model
 
         if not args.machine:
             raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
-        machine = load_profile(args.machine)
-        top = load_model(args.input).bbox_max[2]
-        clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
-        features, notes = all_revolved(Path(args.input), machine, clearance)
-        if not features:
-            raise ProbegenError(f"{args.input}: expected an accessible revolved feature that "
-                                f"plans, found none; " + "; ".join(notes))
-        spec = Spec(source=args.input, model=Path(args.input), machine=machine,
-                    dialect=machine.dialect, clearance_z=clearance, program_number=1001,
-                    program_name="ALL REVOLVED", features=features)
+        spec, notes = all_revolved_spec(Path(args.input), load_profile(args.machine))
     else:
         spec = load_spec(args.input)
     planned = plan_program(spec, runtime_variables=True)
@@ -127,10 +117,6 @@ def _plan(args: argparse.Namespace) -> int:
     for note in notes:
         print(f"note: {note}")
     return ExitCode.OK
-
-
-CLEARANCE_ABOVE_MODEL = 10.0
-"""``plan --all-revolved``: the clearance plane is at least this far above the model, mm."""
 
 
 def _sphere_points(args: argparse.Namespace) -> int:

@@ -25,7 +25,7 @@ gives the geometry without a model.
 
 from __future__ import annotations
 
-import functools
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -103,6 +103,13 @@ class MeshObstacle:
         self.part = fcl.CollisionObject(bvh, fcl.Transform())
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, Any]] = {}
+        self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
+        """Sweep results by (start, end, uncertainties, stylus, required): the mesh is
+        shared per model, so a move checked once (one feature alone, then the whole
+        program) is swept once."""
+        self._inside: dict[tuple[float, float, float], bool] = {}
+        self.floor = -MESH_TOLERANCE
+        """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
 
     def _stylus(self, stylus: Stylus) -> tuple[Any, Any]:
         if stylus not in self._objects:
@@ -127,7 +134,11 @@ class MeshObstacle:
 
     def inside(self, point: np.ndarray) -> bool:
         """Whether ``point`` lies inside the material (a mesh query, for segment starts)."""
-        return bool(self.mesh.contains(point[None])[0])
+        key = (float(point[0]), float(point[1]), float(point[2]))
+        hit = self._inside.get(key)
+        if hit is None:
+            hit = self._inside[key] = bool(self.mesh.contains(point[None])[0])
+        return hit
 
     def name_at(self, point: np.ndarray) -> str:
         _, _, tri = self.mesh.nearest.on_surface(point[None])
@@ -136,21 +147,39 @@ class MeshObstacle:
         return f"face {int(self.face_ids[int(tri[0])])}"
 
 
-@functools.cache
+_MODELS: dict[tuple[str, int, int], Any] = {}
+_MESHES: dict[tuple[str, int, int], MeshObstacle] = {}
+
+
+def _file_key(path: str) -> tuple[str, int, int]:
+    st = os.stat(path)
+    return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
+
+
 def load_model(path: str) -> Any:
-    """Load a STEP model once per process (planning reads it for faces and the mesh)."""
+    """Load a STEP model once per process (planning reads it for faces and the mesh);
+    a file changed since (mtime or size) is loaded again."""
     from probegen import cad
 
-    return cad.load_step(path)
+    key = _file_key(path)
+    hit = _MODELS.get(key)
+    if hit is None:
+        hit = _MODELS[key] = cad.load_step(path)
+    return hit
 
 
 def obstacle_for(model: Path | None, spheres: Sequence[Any]) -> Obstacle:
-    """The part as an obstacle: its mesh, or the spheres when there is no model."""
+    """The part as an obstacle: its mesh (tessellated once per loaded model), or the
+    spheres when there is no model."""
     if model is not None:
         from probegen import cad
 
-        mesh = cad.tessellate(load_model(str(model)))
-        return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+        key = _file_key(str(model))
+        hit = _MESHES.get(key)
+        if hit is None:
+            mesh = cad.tessellate(load_model(str(model)))
+            hit = _MESHES[key] = MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+        return hit
     centres = np.array([s.centre for s in spheres], dtype=np.float64).reshape(-1, 3)
     radii = np.array([s.diameter / 2.0 for s in spheres], dtype=np.float64)
     return SphereObstacle(centres, radii)
@@ -256,12 +285,24 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     feature = ""
     out: list[SegmentClearance] = []
 
+    inside = getattr(obstacle, "inside", None)
+    sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] | None = getattr(
+        obstacle, "sweeps", None)
+    outside: set[tuple[float, float, float]] = set()
+
     def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str) -> None:
-        inside = getattr(obstacle, "inside", None)
-        if inside is not None and inside(a):
+        # a start that ends or starts a segment already cleared is outside: a cleared
+        # sweep never meets the surface, so both its ends lie on the same side
+        if inside is not None and _t(a) not in outside and inside(a):
             raise CollisionError(f"feature {feature or '-'}: segment {len(out) + 1} ({kind}) "
                                  f"starts inside the part at {_fmt(a)}")
-        ball, shank, worst = _sweep(obstacle, a, b, ea, eb, stylus, clear)
+        key = (_t(a), _t(b), ea, eb, stylus, clear)
+        hit = sweeps.get(key) if sweeps is not None else None
+        if hit is None:
+            hit = _sweep(obstacle, a, b, ea, eb, stylus, clear)
+            if sweeps is not None:
+                sweeps[key] = hit
+        ball, shank, worst = hit
         seg = SegmentClearance(len(out) + 1, kind, feature, _t(a), _t(b), ball - clear,
                                shank - clear)
         out.append(seg)
@@ -274,6 +315,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
                 f"{_fmt(a)} to {_fmt(b)}: the stylus {part} {how} {obstacle.name_at(worst)}; "
                 f"expected a clearance of at least {clear:.3f} mm")
+        outside.update((_t(a), _t(b)))
 
     for node in ir.walk(program.body):
         if progress is not None:
@@ -328,6 +370,7 @@ def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: floa
     worst_ball = worst_shank = np.inf
     worst = a
     t = 0.0
+    floor = getattr(obstacle, "floor", None) if ea == eb == 0.0 else None
     while True:
         p = a + t * (b - a)
         extra = (1.0 - t) * ea + t * eb
@@ -338,6 +381,9 @@ def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: floa
         worst_ball, worst_shank = min(worst_ball, ball), min(worst_shank, shank)
         if t >= 1.0 or length == 0.0:
             break
+        if floor is not None and worst_shank <= floor:
+            break  # the shank reached the least clearance the obstacle reports: nothing
+            # further along can change the figures (or the part named)
         step = max((min(ball, shank) - required) / k, MIN_STEP)
         t = min(t + step / length, 1.0)
     slack = MIN_STEP / 2.0

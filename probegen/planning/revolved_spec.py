@@ -19,10 +19,10 @@ from pathlib import Path
 from typing import Any
 
 from probegen import ir
-from probegen.errors import ModelError, PlanningError, SpecError
+from probegen.errors import CollisionError, ModelError, PlanningError, ProbegenError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning.revolved import FeaturePlan, feature_nodes, plan_feature, section_of
-from probegen.spec import RevolvedSpec
+from probegen.spec import RevolvedSpec, Spec
 
 TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
                 "sphere": "sphere"}
@@ -181,10 +181,11 @@ KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere"}
 """The spec kind that measures each recognised type (tori are not planned yet)."""
 
 
-def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float
-                 ) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
+def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, *,
+                 check: bool = True) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
     """A spec feature for every accessible revolved feature of a model that plans
-    (default sections, 8 points), and a note for each one left out."""
+    (default sections, 8 points) and, with ``check``, whose moves clear the collision
+    check on their own (:func:`check_alone`); a note for each one left out."""
     from probegen.cad.revolved import revolved_features
 
     model = _model(model_path, RevolvedSpec("-", str(model_path), "cylinder", None, None,
@@ -202,12 +203,65 @@ def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float
         spec = RevolvedSpec(fid, f"{model_path}: revolved feature {f.id}", KIND_OF_TYPE[f.type],
                             f.faces[0], None, None, 8, None)
         try:
-            plan_revolved(spec, model_path, machine, clearance_z)
+            planned = plan_revolved(spec, model_path, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
             notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not planned: {exc}")
             continue
+        if check:
+            try:
+                check_alone(planned, model_path, machine, clearance_z)
+            except CollisionError as exc:
+                notes.append(f"{fid} ({f.type}, faces {_faces(f)}): left out, it collides: "
+                             f"{exc}")
+                continue
         out.append(spec)
     return tuple(out), tuple(notes)
+
+
+def check_alone(p: RevolvedPlan, model_path: Path, machine: MachineProfile,
+                clearance_z: float) -> None:
+    """Check one planned feature's moves (from the clearance plane and back) against the
+    model with the machine's margin.
+
+    Raises:
+        CollisionError: a move of the feature brings the stylus into the part.
+    """
+    from probegen.planning import make_setup
+    from probegen.planning.collision import check_program, obstacle_for
+    from probegen.spec import Spec
+
+    spec = Spec(source=str(model_path), model=model_path, machine=machine,
+                dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,
+                program_name="ALL REVOLVED", features=(p.spec,))
+    program = ir.Program(make_setup(spec), revolved_nodes(p, machine, clearance_z))
+    check_program(program, obstacle_for(model_path, []), [], machine)
+
+
+CLEARANCE_ABOVE_MODEL = 10.0
+"""``all_revolved_spec``: the clearance plane is at least this far above the model, mm."""
+
+
+def all_revolved_spec(model_path: Path, machine: MachineProfile) -> tuple[Spec, tuple[str, ...]]:
+    """The spec of ``probegen plan MODEL --all-revolved``: every accessible cylinder, cone
+    and sphere that plans and clears the collision check alone (default sections, 8
+    points), the clearance plane at least ``CLEARANCE_ABOVE_MODEL`` above the model;
+    and a note for each feature left out (with the reason or the collision).
+
+    Raises:
+        ProbegenError: no feature is left.
+    """
+    from probegen.planning.collision import load_model
+
+    top = load_model(str(model_path)).bbox_max[2]
+    clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
+    features, notes = all_revolved(model_path, machine, clearance)
+    if not features:
+        raise ProbegenError(f"{model_path}: expected an accessible revolved feature that "
+                            f"plans, found none; " + "; ".join(notes))
+    spec = Spec(source=str(model_path), model=model_path, machine=machine,
+                dialect=machine.dialect, clearance_z=clearance, program_number=1001,
+                program_name="ALL REVOLVED", features=features)
+    return spec, notes
 
 
 def _faces(f: Any) -> str:

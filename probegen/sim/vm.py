@@ -80,12 +80,13 @@ class VirtualMachine:
     def _leave_contact(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Skip the first part of a move that backs a touching ball away from the part.
 
-        After a trigger the ball sits on the surface (pre-travel deep); a move away from
-        the surface is free until the ball is clear, a move into it is a collision.
+        After a trigger the ball sits on the surface (pre-travel deep, or a rounding error
+        either side of it); a move away from the surface is free until the ball is clear,
+        a move into it is a collision.
         """
         depth = -self.part.clearance(a, self.ball_radius)
-        if depth < 0.0:
-            return a, b
+        if depth < -LEAVE_MARGIN:  # clear; a ball within LEAVE_MARGIN still touches (a
+            return a, b            # trigger point rounds to either side of the surface)
         hit = self.part.first_contact(a, b, self.ball_radius)
         length = float(np.linalg.norm(b - a))
         if hit is None or length == 0.0:

@@ -1,0 +1,174 @@
+"""Benchmark: every revolved feature of the NIST models and the DCX part (method M2).
+
+Run:  .venv/bin/python benchmarks/bench_revolved.py [MODEL.stp ...]
+
+Without arguments: every ``/work/shared/ref/nist-step/*.stp`` and the DCX part.  Per
+model the code path of ``probegen plan MODEL --all-revolved --machine
+samples/machines/vmc-fanuc.toml`` (``all_revolved_spec`` + ``plan_program``), then the
+Fanuc program on the virtual machine (the part at its nominal placement, a perfect probe
+with the profile's ball radius).  Prints per model: features planned, features left out
+(with the reasons), touches, path length and nominal cycle time of ours, of the baseline
+(up to the clearance plane after every touch) and of the lower bound, the ratios, the
+planning time and the virtual machine's alarm (must be none).
+
+Lengths and times are the sums over the features' own paths
+(:func:`probegen.planning.revolved.compare`); the travel between features at the
+clearance plane does not depend on the method and is printed apart (``tour``).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+MACHINE = REPO / "samples/machines/vmc-fanuc.toml"
+NIST = Path("/work/shared/ref/nist-step")
+DCX = Path("/work/shared/ref/nist-ippdme/DCXpart/STEP_AP214/DaimlerChryslerTestPartAP214.stp")
+
+
+@dataclass
+class Row:
+    """One model's figures."""
+
+    model: str
+    planned: int = 0
+    skipped: int = 0
+    reasons: Counter[str] | None = None
+    touches: int = 0
+    ours: tuple[float, float] = (0.0, 0.0)
+    baseline: tuple[float, float] = (0.0, 0.0)
+    bound: tuple[float, float] = (0.0, 0.0)
+    tour: float = 0.0
+    plan_s: float = 0.0
+    vm_s: float = 0.0
+    vm_touches: int = 0
+    alarm: str | None = None
+    error: str | None = None
+    notes: tuple[str, ...] = ()
+
+
+def reason_of(note: str) -> str:
+    """A short class of a left-out note."""
+    if "not parallel to Z" in note:
+        return "axis not vertical"
+    if "left out, it collides" in note:
+        return "collides"
+    if "a torus" in note:
+        return "torus (no kind)"
+    if "closed above" in note:
+        return "closed above"
+    if "centre lies in material" in note:
+        return "centre in material"
+    if "expected R > r + d" in note:
+        return "bore < ball + retract"
+    if "accessible arc longer" in note:
+        return "arc too short"
+    if "not accessible" in note:
+        return "not accessible (other)"
+    return "does not plan (other)"
+
+
+def run(model: Path) -> Row:
+    """Plan, emit Fanuc and simulate one model."""
+    from probegen import cad
+    from probegen.dialects import get_dialect
+    from probegen.errors import ProbegenError
+    from probegen.machine.probe_model import ProbeModel
+    from probegen.machine.profile import load_profile
+    from probegen.planning import plan_program
+    from probegen.planning.revolved import compare
+    from probegen.planning.revolved_spec import all_revolved_spec
+    from probegen.sim.contact import PlacedPart
+    from probegen.sim.vm import VirtualMachine, run_text
+
+    row = Row(model.stem)
+    machine = load_profile(MACHINE)
+    t0 = time.perf_counter()
+    try:
+        spec, notes = all_revolved_spec(model, machine)
+        planned = plan_program(spec, runtime_variables=True)
+    except ProbegenError as exc:
+        row.plan_s = time.perf_counter() - t0
+        row.error = str(exc)
+        row.reasons = Counter(reason_of(n) for n in str(exc).split("; ")[1:])
+        row.skipped = sum(row.reasons.values())
+        return row
+    row.plan_s = time.perf_counter() - t0
+    row.notes = notes
+    row.planned = len(planned.revolved)
+    row.skipped = len(notes)
+    row.reasons = Counter(reason_of(n) for n in notes)
+    ours, base, bound = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
+    for p in planned.revolved:
+        c = compare(p.plan, machine)
+        row.touches += len(p.normals)
+        for acc, fig in ((ours, c.plan), (base, c.baseline), (bound, c.lower_bound)):
+            acc[0] += fig.length
+            acc[1] += fig.time
+    row.ours, row.baseline, row.bound = (ours[0], ours[1]), (base[0], base[1]), (
+        bound[0], bound[1])
+    row.tour = planned.tour.length if planned.tour is not None else 0.0
+    text = get_dialect("fanuc").generate(planned.program)
+    t1 = time.perf_counter()
+    vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
+                        ProbeModel(machine.probe.ball_radius))
+    res = run_text(text, vm, kind="macrob", source=model.name)
+    row.vm_s = time.perf_counter() - t1
+    row.vm_touches = res.touches
+    row.alarm = res.alarm
+    return row
+
+
+def table(rows: list[Row]) -> str:
+    """The summary table (Markdown)."""
+    head = ("| model | planned | left out | touches | ours mm / s | baseline mm / s | "
+            "bound mm / s | time ours/base | time ours/bound | tour mm | plan s | VM |")
+    out = [head, "|" + "---|" * 12]
+    for r in rows:
+        if r.error is not None:
+            out.append(f"| {r.model} | 0 | {r.skipped} | 0 | - | - | - | - | - | - | "
+                       f"{r.plan_s:.1f} | not run: no feature plans |")
+            continue
+        tb = r.ours[1] / r.baseline[1] if r.baseline[1] else float("nan")
+        tl = r.ours[1] / r.bound[1] if r.bound[1] else float("nan")
+        vm = "no alarm" if r.alarm is None else f"ALARM {r.alarm}"
+        if r.alarm is None and r.vm_touches != r.touches:
+            vm += f" ({r.vm_touches} of {r.touches} touches)"
+        out.append(f"| {r.model} | {r.planned} | {r.skipped} | {r.touches} | "
+                   f"{r.ours[0]:.0f} / {r.ours[1]:.1f} | {r.baseline[0]:.0f} / "
+                   f"{r.baseline[1]:.1f} | {r.bound[0]:.0f} / {r.bound[1]:.1f} | "
+                   f"{tb:.3f} | {tl:.3f} | {r.tour:.0f} | {r.plan_s:.1f} | {vm} |")
+    return "\n".join(out)
+
+
+def main(argv: list[str]) -> int:
+    import probegen.progress
+
+    probegen.progress.ENABLED = False
+    models = [Path(a) for a in argv] or [*sorted(NIST.glob("*.stp")), DCX]
+    rows = []
+    for m in models:
+        r = run(m)
+        rows.append(r)
+        reasons = ", ".join(f"{k} {v}" for k, v in sorted((r.reasons or {}).items()))
+        print(f"{r.model}: {r.planned} planned, {r.skipped} left out ({reasons}); "
+              f"plan {r.plan_s:.1f} s, VM {r.vm_s:.1f} s, alarm {r.alarm}", flush=True)
+        for n in r.notes:
+            if reason_of(n) == "collides":
+                print(f"  note: {n}")
+    print()
+    print(table(rows))
+    bad = [r.model for r in rows if r.alarm is not None]
+    if bad:
+        print(f"\nALARM on {', '.join(bad)}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
