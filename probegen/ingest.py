@@ -177,6 +177,23 @@ def to_json(ing: Ingested) -> str:
     return json.dumps(doc, indent=2) + "\n"
 
 
+def _measured_json(characteristics: Any, points: Any, directions: Any,
+                   residuals: Any) -> dict[str, Any]:
+    """The part of a feature's JSON every kind shares: checks, points, normals, residuals."""
+    return {
+        "characteristics": [
+            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
+             "deviation": _f(c.deviation),
+             "lower": None if c.lower is None else _f(c.lower),
+             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
+            for c in characteristics
+        ],
+        "points": [[_f(v) for v in p] for p in points],
+        "directions": [[_f(v) for v in d] for d in directions],
+        "residuals": [_f(v) for v in residuals],
+    }
+
+
 def _feature_json(r: SphereTestResult) -> dict[str, Any]:
     return {
         "id": r.feature,
@@ -188,16 +205,7 @@ def _feature_json(r: SphereTestResult) -> dict[str, Any]:
         "p_ftu": _f(r.p_ftu),
         "p_stu": _f(r.p_stu),
         "effective_radius": _f(r.effective_radius),
-        "characteristics": [
-            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
-             "deviation": _f(c.deviation),
-             "lower": None if c.lower is None else _f(c.lower),
-             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
-            for c in r.characteristics
-        ],
-        "points": [[_f(v) for v in p] for p in r.points],
-        "directions": [[_f(v) for v in d] for d in r.directions],
-        "residuals": [_f(v) for v in r.fit.residuals],
+        **_measured_json(r.characteristics, r.points, r.directions, r.fit.residuals),
     }
 
 
@@ -211,16 +219,7 @@ def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
         "axis": [_f(v) for v in r.axis],
         "diameter": _f(r.diameter),
         "form": _f(r.form),
-        "characteristics": [
-            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
-             "deviation": _f(c.deviation),
-             "lower": None if c.lower is None else _f(c.lower),
-             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
-            for c in r.characteristics
-        ],
-        "points": [[_f(v) for v in p] for p in r.points],
-        "directions": [[_f(v) for v in d] for d in r.directions],
-        "residuals": [_f(v) for v in r.residuals],
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
     }
 
 
