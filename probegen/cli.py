@@ -214,7 +214,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     from probegen.machine.probe_model import Lobing, ProbeModel
     from probegen.sim.contact import PlacedPart
     from probegen.sim.serial_play import PtyLink
-    from probegen.sim.vm import VirtualMachine, program_kind, run_text
+    from probegen.sim.vm import VirtualMachine, control_state, program_kind, run_text
 
     part, ball = _sim_part(args)
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
@@ -242,6 +242,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     else:
         Path(args.output).write_bytes(data)
         print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
+    for line in control_state(result):  # offsets and rotation the program left
+        print(f"  control: {line}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
         return ExitCode.SIM_ALARM

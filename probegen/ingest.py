@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,8 +26,10 @@ from probegen.compensate import ProbeCalibration, compensate
 from probegen.errors import ProbegenError
 from probegen.evaluate import SphereTestResult, evaluate_sphere_test
 from probegen.evaluate_revolved import RevolvedResult, evaluate_revolved
+from probegen.ingest_actions import Decision, decisions
 from probegen.results import DprntLog, read_dprnt
 from probegen.spec import RevolvedSpec, Spec
+from probegen.spec_actions import PlanarSpec
 
 Vec3 = tuple[float, float, float]
 
@@ -49,6 +52,8 @@ class Ingested:
         path: the planned stylus path at nominal, as (feature, kind, start, end) segments
             (kind: rapid, protected, or touch ...), for the report.
         revolved: one evaluated result per circle or cylinder feature with touches.
+        decisions: the in-process decisions' values, offline and as the machine
+            printed them (``ingest_actions``).
     """
 
     source: str
@@ -57,6 +62,7 @@ class Ingested:
     notes: tuple[str, ...]
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
     revolved: tuple[RevolvedResult, ...] = ()
+    decisions: tuple[Decision, ...] = ()
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
@@ -81,6 +87,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
             found_r = _revolved(feature, spec, touches, notes)
             if found_r is not None:
                 revolved.append(found_r)
+            continue
+        if isinstance(feature, PlanarSpec):  # lines and planes: decisions only
             continue
         sphere = resolve_sphere(feature, spec.model)
         plan = plan_points(feature, sphere, spec.machine)
@@ -111,7 +119,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
 
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
-    return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved))
+    return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
+                    decisions(spec, log))
 
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
@@ -174,6 +183,11 @@ def to_json(ing: Ingested) -> str:
         "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
                   "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
+    if ing.decisions:  # features with in-process decisions (docs/actions.md)
+        doc["decisions"] = [{"feature": d.feature, "key": d.key, "agrees": d.agrees,
+                             "offline": None if d.offline is None else _f(d.offline),
+                             "machine": None if d.machine is None else _f(d.machine)}
+                            for d in ing.decisions]
     return json.dumps(doc, indent=2) + "\n"
 
 
@@ -258,6 +272,20 @@ def to_table(ing: Ingested) -> str:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                          f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))
+    text = _columns(rows)
+    if ing.decisions:
+        text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
+            (d.feature, d.key, _opt(d.offline), _opt(d.machine),
+             {None: "-", True: "yes", False: "NO"}[d.agrees]) for d in ing.decisions])
+    return text
+
+
+def _opt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.6f}"
+
+
+def _columns(rows: Sequence[tuple[str, ...]]) -> str:
+    """Rows as aligned columns (the first two left-aligned)."""
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     lines = ["  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
                        for i, (cell, w) in enumerate(zip(row, widths, strict=True))).rstrip()

@@ -19,6 +19,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
+from probegen.ir_actions import ActionNode
+from probegen.ir_actions import Align as Align  # re-exported: ir.Align ...
+from probegen.ir_actions import Check as Check
+from probegen.ir_actions import SetWorkOffset as SetWorkOffset
+from probegen.ir_actions import UpdateTool as UpdateTool
+
 
 @dataclass(frozen=True, slots=True)
 class Var:
@@ -196,7 +202,30 @@ class ConeDef:
     inner: bool = False
 
 
-FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef
+@dataclass(frozen=True, slots=True)
+class PlaneDef:
+    """A nominal plane (DMIS ``FEAT/PLANE``): a point on it and its outward normal
+    (``inner`` is always False: every feature definition has the attribute)."""
+
+    id: str
+    point: Vec3
+    normal: Vec3
+    inner: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class LineDef:
+    """A nominal bounded line on a face (DMIS ``FEAT/LINE,BND``): from ``start`` to
+    ``end`` (mm), ``normal`` the face's outward normal."""
+
+    id: str
+    start: Vec3
+    end: Vec3
+    normal: Vec3
+    inner: bool = False
+
+
+FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef | PlaneDef | LineDef
 
 
 @dataclass(frozen=True, slots=True)
@@ -226,7 +255,8 @@ class RestoreFrame:
     name: str
 
 
-Node = Comment | Move | Touch | Assign | ReportCentre | FeatureBlock | LocalFrame | RestoreFrame
+Node = (Comment | Move | Touch | Assign | ReportCentre | FeatureBlock | LocalFrame | RestoreFrame
+        | ActionNode)
 
 
 @dataclass(frozen=True, slots=True)

@@ -50,14 +50,16 @@ from pathlib import Path
 from probegen.constants import MM_PER_INCH
 from probegen.errors import SpecError, did_you_mean
 from probegen.machine.profile import MachineProfile, load_profile
+from probegen.spec_actions import PLANAR_KINDS, Actions, PlanarSpec, read_actions, read_planar
 from probegen.tomlread import Table, load_toml
 
 Vec3 = tuple[float, float, float]
 
 REVOLVED_KINDS = ("circle", "cylinder", "cone", "sphere")
 """Revolved feature kinds (method M2), measured in sections of a model's surface."""
-FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS)
-"""Feature kinds this version plans (method M1: sphere_test; method M2: the rest)."""
+FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS, *PLANAR_KINDS)
+"""Feature kinds this version plans (method M1: sphere_test; method M2: the revolved
+kinds; ``line``/``plane``: touches at given points of a planar face, spec_actions)."""
 DEFAULT_POINTS = 8
 """Default touches per section of a revolved feature."""
 
@@ -98,6 +100,7 @@ class SphereTest:
         locate: whether the program first finds the real centre.
         locate_uncertainty: how far the real centre may be from nominal (mm).
         tolerance: limits for pass/fail.
+        actions: ``set_work_offset`` from the located centre (``spec_actions``).
     """
 
     id: str
@@ -113,6 +116,7 @@ class SphereTest:
     locate: bool
     locate_uncertainty: float
     tolerance: SphereTolerance = SphereTolerance()
+    actions: Actions = Actions()
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,6 +152,7 @@ class RevolvedSpec:
         points: touches per section.
         retract: the M2 safe distance ``d`` (mm), or None for the probe's approach.
         tolerance: limits for pass/fail.
+        actions: run-time decisions (``spec_actions``; circles and cylinders).
     """
 
     id: str
@@ -159,9 +164,10 @@ class RevolvedSpec:
     points: int
     retract: float | None
     tolerance: RevolvedTolerance = RevolvedTolerance()
+    actions: Actions = Actions()
 
 
-Feature = SphereTest | RevolvedSpec
+Feature = SphereTest | RevolvedSpec | PlanarSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -260,6 +266,7 @@ def _feature(t: Table, k: float) -> Feature:
         raise SpecError(f"{t.where('kind')}: expected one of {', '.join(FEATURE_KINDS)}, "
                         f"found {kind!r}{did_you_mean(kind, FEATURE_KINDS)}")
     feature: Feature = (_sphere_test(t, fid, k) if kind == "sphere_test"
+                        else read_planar(t, fid, kind, k) if kind in PLANAR_KINDS
                         else _revolved(t, fid, kind, k))
     t.done()
     return feature
@@ -295,7 +302,22 @@ def _sphere_test(t: Table, fid: str, k: float) -> SphereTest:
         max_polar_angle=polar, retract=None if retract is None else retract * k,
         locate=t.get_bool("locate", True), locate_uncertainty=uncertainty * k,
         tolerance=_sphere_tolerance(t.table("tolerance"), k),
+        actions=_sphere_actions(t, k),
     )
+
+
+def _sphere_actions(t: Table, k: float) -> Actions:
+    """A sphere test's actions: only ``set_work_offset`` from the located centre."""
+    actions = read_actions(t, k, "XYZ")
+    other = [key for key, v in (("update_tool", actions.tool), ("align", actions.align),
+                                ("on_out_of_tolerance", actions.checked or None)) if v]
+    if other:
+        raise SpecError(f"{t.where(other[0])}: a sphere_test takes only set_work_offset "
+                        f"(from its located centre), found {', '.join(other)}")
+    if actions.work_offset is not None and not t.get_bool("locate", True):
+        raise SpecError(f"{t.where('locate')}: set_work_offset on a sphere_test needs "
+                        f"locate = true (the control computes the centre), found false")
+    return actions
 
 
 def _sphere_tolerance(t: Table, k: float) -> SphereTolerance:
@@ -320,6 +342,7 @@ def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
         id=fid, where=f"{t.file}: {t.path}", kind=kind, face=face, at=at, sections=sections,
         points=points, retract=None if retract is None else retract * k,
         tolerance=_revolved_tolerance(t.table("tolerance"), k),
+        actions=read_actions(t, k, "XY"),
     )
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -46,7 +47,20 @@ def test_only_the_reset_codes_differ_from_fanuc(in_repo: Path, spec_path: Path) 
     fanuc = get_dialect("fanuc").generate(program).splitlines()
     haas = get_dialect("haas").generate(program).splitlines()
     differ = [(f, h) for f, h in zip(fanuc, haas, strict=True) if f != h]
-    assert differ == [("G90 G17 G40 G49 G80 G94 G69 G15 G50.1", "G90 G17 G40 G49 G80 G94 G69 G100")]
+    reset = ("G90 G17 G40 G49 G80 G94 G69 G15 G50.1", "G90 G17 G40 G49 G80 G94 G69 G100")
+    # and a radius wear correction: Haas D offsets are diameters
+    wear = [(f, h) for f, h in differ[1:]
+            if "G10 L13" in f and h == re.sub(r" R(#\d+)$", r" R[2.0*\1]", f)]
+    assert differ[0] == reset and len(wear) == len(differ) - 1
+    assert len(wear) == (1 if "update_tool" in spec_path.read_text(encoding="utf-8") else 0)
+
+
+def test_haas_refuses_a_flag_in_its_reserved_variables() -> None:
+    check = ir.Check("B", "plane", (), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.0, False, 3.0, 0.0,
+                     (), "flag", 560)
+    with pytest.raises(UnsupportedError, match="cannot write #560 .on_out_of_tolerance of "
+                                               "feature B.: Haas keeps #550-#599"):
+        get_dialect("haas").generate(ir.Program(setup(), (check,)))
 
 
 def test_reset_codes_in_haas_words() -> None:

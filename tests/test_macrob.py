@@ -507,7 +507,8 @@ def test_g10_tool_offsets() -> None:
     ("G31 X1.", 11),
     ("G2 X1. Y1. I1. F100.", 9010),
     ("G41 D1", 9010),
-    ("G68 X0 Y0 R10.", 9010),
+    ("G51 X0 Y0 P2.", 9010),
+    ("G18 G68 X0 Z0 R10.", 9010),
     ("G0 A90.", 9010),
     ("G100 X1.", 10),
     ("G10 L2 P9 X1.", 9011),
@@ -696,6 +697,8 @@ def test_reference_programs_stop_cleanly_on_a_plain_fanuc() -> None:
 
 # --- our own emitted programs -----------------------------------------------------------------
 
+DECISION_ALARMS = (3010, 3011)
+"""Out of tolerance, tool correction too large (docs/actions.md)."""
 GOLDEN_VARIABLES = {5221: 10.0, 5222: -20.0, 5223: -300.0, 11020: 150.0}
 """G54 and the probe's length offset (H20): skip points come back through both."""
 
@@ -704,11 +707,15 @@ GOLDEN_VARIABLES = {5221: 10.0, 5222: -20.0, 5223: -300.0, 11020: 150.0}
 @pytest.mark.parametrize("fraction", [0.3, 0.7])
 def test_golden_programs_print_one_point_per_touch(path: Path, fraction: float) -> None:
     machine = Fraction(fraction)
-    result = run(path.read_text(), machine, source=str(path), variables=GOLDEN_VARIABLES,
+    text = path.read_text()
+    result = run(text, machine, source=str(path), variables=GOLDEN_VARIABLES,
                  settings=settings_for(path))
-    assert (result.stopped, result.alarm) == ("M30", None)
     log = parse_dprnt(result.output, strict=True)
-    assert log.complete and not log.errors
+    if result.alarm is not None:  # a setup program judged the arbitrary touches (actions)
+        assert "(CHECK " in text and result.alarm.number in DECISION_ALARMS
+        assert [e.code for e in log.errors] in (["OUTTOL"], ["BIGCORR"])
+    else:
+        assert result.stopped == "M30" and log.complete and not log.errors
     assert len(log.touches) == len(machine.hits) > 0
     offset = (10.0, -20.0, -300.0 + 150.0)
     for touch, hit in zip(log.touches, machine.hits, strict=True):
@@ -835,3 +842,23 @@ def test_a_thousand_touches_run_to_the_end() -> None:
     assert (result.stopped, result.alarm) == ("M30", None)
     assert result.output.count("\nPT SPH1 ") == 1_000
 
+
+
+def test_g68_rotates_program_coordinates_about_its_centre() -> None:
+    m = FreeMachine(record=True)
+    res = run("G90 G21 G54\nG17 G68 X10. Y0 R90.\nG0 X20. Y0 Z5.\n#1=#5041\n#2=#5042\n"
+              "G69\nG0 X20. Y0\n#3=#5021\n#4=#5022\nM30\n", m,
+              variables={5221: 100.0, 5222: 200.0})
+    assert res.stopped == "M30"
+    # (20, 0) turned 90 degrees about (10, 0) is (10, 10); G54 adds (100, 200)
+    end = m.moves[0][2]
+    assert end == pytest.approx((110.0, 210.0, 5.0))
+    assert res.variables[1] == pytest.approx(20.0) and res.variables[2] == pytest.approx(0.0)
+    assert (res.variables[3], res.variables[4]) == pytest.approx((120.0, 200.0))  # G69
+    assert res.rotation is None
+
+
+def test_g68_stays_in_the_result_and_a_block_with_it_does_not_move() -> None:
+    m = FreeMachine(record=True)
+    res = run("G90 G17 G21\nG68 X50. Y50. R0.5\nM30\n", m)
+    assert res.rotation == (50.0, 50.0, 0.5) and m.moves == []

@@ -89,6 +89,9 @@ class Dialect:
         if isinstance(f, ir.CylinderDef):
             return (f"FEATURE {f.id} CYLINDER {side} D{self.length(f.diameter)} "
                     f"L{self.length(f.length)}")
+        if isinstance(f, ir.PlaneDef | ir.LineDef):
+            kind = "PLANE" if isinstance(f, ir.PlaneDef) else "LINE"
+            return f"FEATURE {f.id} {kind} N{','.join(self.num(v, 3) for v in f.normal)}"
         return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
 
     def var(self, name: str) -> str:

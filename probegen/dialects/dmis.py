@@ -12,6 +12,8 @@ Conventions (see ``docs/dialects.md``):
   force at the start is saved as ``D(PCS)`` and recalled by ``RestoreFrame``.
 * DMIS has no run-time arithmetic: ``ir.Var``, ``Assign`` and ``ReportCentre`` are
   unsupported.
+* The in-process decisions (``ir_actions``): tolerances and the part frame, see
+  ``dialects/dmis_actions.py``.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from typing import Any, ClassVar
 
 from probegen import ir
 from probegen.dialects.base import Dialect
+from probegen.dialects.dmis_actions import check_lines, frame_lines
 
 
 class Dmis(Dialect):
@@ -51,7 +54,14 @@ class Dmis(Dialect):
 
     def lower(self, program: ir.Program) -> dict[str, Any]:
         s = program.setup
-        body = [self.block(node) for node in program.body]
+        final = (ir.SetWorkOffset, ir.Align, ir.UpdateTool)
+        self.directions = {n.feature: n.direction for n in program.body
+                           if isinstance(n, ir.Check) and n.fit == "line"}
+        body = [self.block(node) for node in program.body if not isinstance(node, final)]
+        frame = frame_lines(self, [n for n in program.body if isinstance(n, final)],
+                            [n.feature for n in program.body if isinstance(n, ir.Check)])
+        if frame:
+            body.append({"kind": "lines", "lines": frame})
         frames = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))
         return {"s": s, "units": self.UNITS_WORD[s.units], "body": body, "frames": frames,
                 "length": self.length(s.probe_length), "ball": self.length(s.ball_diameter),
@@ -69,6 +79,8 @@ class Dmis(Dialect):
             return {"kind": "frame", "name": node.name, "feature": node.feature}
         if isinstance(node, ir.RestoreFrame):
             return {"kind": "restore"}
+        if isinstance(node, ir.Check):
+            return {"kind": "lines", "lines": check_lines(self, node)}
         raise self.unsupported(node, "DMIS has no run-time arithmetic")
 
     def move(self, node: ir.Move) -> dict[str, Any]:
@@ -103,6 +115,13 @@ class Dmis(Dialect):
     def definition(self, f: ir.FeatureDef, node: object) -> tuple[str, str]:
         """The MEAS word and the ``FEAT/`` text of a nominal feature."""
         side = "INNER" if f.inner else "OUTER"
+        if isinstance(f, ir.PlaneDef):
+            values = [*self.point(f.point, node), *(self.num(v, 6) for v in f.normal)]
+            return "PLANE", ",".join(["PLANE", "CART", *values])
+        if isinstance(f, ir.LineDef):
+            values = [*self.point(f.start, node), *self.point(f.end, node),
+                      *(self.num(v, 6) for v in f.normal)]
+            return "LINE", ",".join(["LINE", "BND", "CART", *values])
         if isinstance(f, ir.SphereDef):
             values = [*self.point(f.centre, node), self.length(f.diameter)]
             return "SPHERE", ",".join(["SPHERE", side, "CART", *values])

@@ -27,6 +27,7 @@ from typing import Any, ClassVar
 from probegen import ir
 from probegen.constants import tol
 from probegen.dialects.base import Dialect
+from probegen.dialects.fanuc_actions import lower_action
 
 SCRATCH = 90
 """Offset of the scratch variables (three targets and one check sum) from the base."""
@@ -43,6 +44,9 @@ class Fanuc(Dialect):
     """The G code for each unit system."""
     DPRNT_FORMAT: ClassVar[dict[str, str]] = {"mm": "44", "inch": "35"}
     """Integer and fraction digits of printed positions (``#5061[44]``)."""
+    RADIUS_WEAR_FACTOR: ClassVar[float] = 1.0
+    """What a radius correction is multiplied by in ``G10 L13`` (Fanuc memory C: the D
+    offset is a radius)."""
     CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
     """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
     skip did not fire: the end point itself is rounded to the least input increment."""
@@ -115,6 +119,8 @@ class Fanuc(Dialect):
             return self.assign(node)
         if isinstance(node, ir.ReportCentre):
             return self.centre(node)
+        if isinstance(node, ir.Check | ir.SetWorkOffset | ir.UpdateTool | ir.Align):
+            return {"kind": "lines", "lines": lower_action(self, node)}
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
 
     def centre(self, node: ir.ReportCentre) -> dict[str, Any]:

@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 from probegen import ir
 from probegen.dialects.fanuc import SCRATCH, Fanuc
 from probegen.errors import UnsupportedError
+from probegen.ir_actions import describe
 
 
 class Haas(Fanuc):
@@ -35,8 +36,14 @@ class Haas(Fanuc):
     WIPS probe; #709 is the fixture-clamp input).  #150-#199 hold probe results when a
     probe is installed: writing them only overwrites the last results."""
 
+    RADIUS_WEAR_FACTOR: ClassVar[float] = 2.0
+    """Haas G10 L12/L13 write the tool *diameter* geometry/wear (with Setting 40, Tool
+    Offset Measure, at its default Diameter): a radius correction is doubled."""
+
     def lower(self, program: ir.Program) -> dict[str, Any]:
         self.check_variables(program.setup.variable_base)
+        for node in program.body:
+            self.check_action_variable(node)
         context = super().lower(program)
         s: ir.Setup = context["s"]
         context["s"] = dataclasses.replace(s, reset_codes=self.reset_codes(s.reset_codes))
@@ -46,6 +53,21 @@ class Haas(Fanuc):
         """The profile's reset codes in Haas words (see ``RESET_CODES``)."""
         words = (self.RESET_CODES.get(code, code) for code in codes)
         return tuple(word for word in words if word is not None)
+
+    def check_action_variable(self, node: ir.Node) -> None:
+        """Refuse a flag or angle variable Haas reserves (``RESERVED_VARIABLES``).
+
+        Raises:
+            UnsupportedError: ``flag`` or ``align.variable`` is reserved.
+        """
+        if not isinstance(node, ir.Check | ir.Align):
+            return
+        number = node.flag if isinstance(node, ir.Check) else node.variable
+        for first, last, what in self.RESERVED_VARIABLES:
+            if number is not None and first <= number <= last:
+                raise UnsupportedError(
+                    f"dialect {self.NAME!r} cannot write #{number} ({describe(node)}): Haas "
+                    f"keeps #{first}-#{last} for {what}")
 
     def check_variables(self, base: int) -> None:
         """Refuse a variable range that overlaps one Haas reserves.

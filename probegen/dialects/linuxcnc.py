@@ -38,6 +38,8 @@ from probegen import ir
 from probegen.constants import tol
 from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import feature_owners
+from probegen.errors import UnsupportedError
+from probegen.ir_actions import describe
 
 _ACTIVE_COMMENT = re.compile(
     r"\s*(MSG|DEBUG|PRINT|LOG|LOGOPEN|LOGAPPEND|LOGCLOSE|PROBEOPEN|PROBECLOSE|ABORT|PY)\b",
@@ -165,6 +167,10 @@ class LinuxCnc(Dialect):
             return self.assign(node)
         if isinstance(node, ir.ReportCentre):
             return self.centre(node)
+        if isinstance(node, ir.Check | ir.SetWorkOffset | ir.UpdateTool | ir.Align):
+            raise UnsupportedError(f"dialect {self.NAME!r} cannot express {describe(node)}: "
+                                   f"the in-process decisions are emitted for fanuc and haas "
+                                   f"(and tolerances and frames for dmis) only")
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
 
     def move(self, node: ir.Move, feature: str) -> dict[str, Any]:

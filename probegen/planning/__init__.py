@@ -13,11 +13,19 @@ from dataclasses import dataclass
 from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
+from probegen.planning.actions import (
+    final_actions,
+    planar_check,
+    revolved_check,
+    sphere_offset,
+)
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
 from probegen.planning.order import Stop, Tour, order_stops
+from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
 from probegen.spec import RevolvedSpec, Spec
+from probegen.spec_actions import PlanarSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,13 +84,24 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
     revolved: list[RevolvedPlan] = []
+    checked: list[tuple[RevolvedSpec | PlanarSpec, ir.Check]] = []
+    spheres: list[ir.SetWorkOffset] = []
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             revolved.append(plan_revolved(feature, spec.model, machine, spec.clearance_z))
+        elif isinstance(feature, PlanarSpec):
+            planar = plan_planar(feature, spec.model, machine)
+            axes, check = planar_check(planar, machine)
+            body += planar_nodes(planar, machine, spec.clearance_z, axes)
+            if check is not None:
+                body.append(check)
+                checked.append((feature, check))
         else:
             sphere = resolve_sphere(feature, spec.model)
             p = plan_points(feature, sphere, machine)
             plans.append(p)
+            offset = sphere_offset(feature, sphere.centre, machine.work_offset)
+            spheres += [offset] if offset is not None else []
             if not feature.locate:
                 body += locate.measure_nominal(p, machine, spec.clearance_z)
             elif runtime_variables:
@@ -97,8 +116,13 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         tour = order_stops(stops, clearance_z=spec.clearance_z)
         revolved = [revolved[k] for k in tour.order]
         for r in revolved:
-            body += revolved_nodes(r, machine, spec.clearance_z)
-    program = ir.Program(make_setup(spec), tuple(body))
+            nodes = revolved_check(revolved_nodes(r, machine, spec.clearance_z), r.spec,
+                                   r.definition, machine)
+            body += nodes
+            checked += [(r.spec, n) for n in nodes if isinstance(n, ir.Check)]
+    setup = make_setup(spec)
+    body += final_actions(checked, setup.work_offset, spheres)
+    program = ir.Program(setup, tuple(body))
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
     report = check_program(program, obstacle, plans, machine, progress=progress)
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour)

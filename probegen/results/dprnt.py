@@ -47,6 +47,7 @@ __all__ = [
     "Centre",
     "DprntLog",
     "ProgramError",
+    "Result",
     "Touch",
     "decode_dprnt",
     "parse_dprnt",
@@ -80,7 +81,8 @@ _PICTURES = {c: 0x2400 + c for c in range(32) if c != 9} | {127: 0x2421}
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
 
-_RECORD_KEYWORDS = frozenset({"PGSTART", "LOC", "CTR", "PT", "ERR", "PGEND"})
+_RECORD_KEYWORDS = frozenset({"PGSTART", "LOC", "CTR", "PT", "RES", "ERR", "PGEND"})
+"""The keywords that start a record."""
 
 _NAMES = {
     "FEATURE": "a feature id",
@@ -92,7 +94,8 @@ _NAMES = {
     "AZ": "'Z'",
     "PROGNUM": "a program number (O and digits)",
     "VERSION": "a format version (V and digits)",
-    "ERRCODE": "an error code (NOTOUCH or COLLISION)",
+    "ERRCODE": "an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT)",
+    "KEY": "a result name (letters)",
     "_PCT": "'%'",
     "$END": "end of line",
 }
@@ -138,18 +141,40 @@ class Centre:
 
 
 @dataclass(frozen=True, slots=True)
+class Result:
+    """A ``RES`` record: values the program computed for a feature (``docs/actions.md``).
+
+    Attributes:
+        feature: feature id, upper case.
+        values: (name, value) pairs in the order printed (``X``, ``D``, ``NG`` ...).
+        line: 1-based line number in the log.
+        run: the program run it belongs to (see :attr:`Touch.run`).
+    """
+
+    feature: str
+    values: tuple[tuple[str, float], ...]
+    line: int
+    run: int = 0
+
+
+ErrorCode = Literal["NOTOUCH", "COLLISION", "OUTTOL", "BIGCORR", "BADFIT"]
+"""``ERR`` codes: no skip signal, signal on a guarded move, a feature out of tolerance,
+a tool correction beyond its maximum, touches that fit no circle."""
+
+
+@dataclass(frozen=True, slots=True)
 class ProgramError:
     """An ``ERR`` record: the program printed it just before raising an alarm.
 
     Attributes:
-        code: ``"NOTOUCH"`` (no skip signal) or ``"COLLISION"`` (signal on a guarded move).
+        code: see :data:`ErrorCode`.
         feature: feature id, upper case.
         index: the point index being measured.
         line: 1-based line number in the log.
         run: the program run it belongs to (see :attr:`Touch.run`).
     """
 
-    code: Literal["NOTOUCH", "COLLISION"]
+    code: ErrorCode
     feature: str
     index: int
     line: int
@@ -170,6 +195,7 @@ class DprntLog:
         restarts: how many times the program started again: a ``PGSTART`` after an
             earlier ``PGSTART`` or after records (a resumed or re-run program).
         diagnostics: one per malformed or out-of-place line, in line order.
+        results: ``RES`` records in log order.
     """
 
     source: str
@@ -180,6 +206,7 @@ class DprntLog:
     complete: bool
     restarts: int
     diagnostics: tuple[Diagnostic, ...]
+    results: tuple[Result, ...] = ()
 
     def latest_touches(self) -> tuple[Touch, ...]:
         """Return one touch per (kind, feature, index), the last one read, in line order.
@@ -203,7 +230,7 @@ class _End:
     program: int
 
 
-_Record = Touch | Centre | ProgramError | _Header | _End
+_Record = Touch | Centre | ProgramError | Result | _Header | _End
 
 
 class _FieldError(Exception):
@@ -238,8 +265,14 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
         return Centre(_feature(c[1]), c[2], 0)
 
     def err(self, c: list[Token]) -> ProgramError:
-        code: Literal["NOTOUCH", "COLLISION"] = "NOTOUCH" if c[1] == "NOTOUCH" else "COLLISION"
+        code: ErrorCode = str(c[1])  # type: ignore[assignment]
         return ProgramError(code, _feature(c[2]), _index(c[3]), 0)
+
+    def res(self, c: list[Any]) -> Result:
+        return Result(_feature(c[1]), tuple(c[2:]), 0)
+
+    def keyed(self, c: list[Token]) -> tuple[str, float]:
+        return (str(c[0]), self.number(c[1:]))
 
     def xyz(self, c: list[Token | float]) -> tuple[float, float, float]:
         return (float(c[1]), float(c[3]), float(c[5]))
@@ -327,7 +360,7 @@ def _expected_at(clean: str, column: int) -> set[str]:
 def _expected_names(names: set[str]) -> str:
     """Return readable text for a set of terminal names."""
     if _RECORD_KEYWORDS <= names:
-        return "a record (PGSTART, LOC, CTR, PT, ERR or PGEND)"
+        return "a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND)"
     if "UNUMBER" in names:
         names = names - {"SIGN"}
     if "$END" in names:
@@ -398,6 +431,7 @@ class _Builder:
         self.touches: list[Touch] = []
         self.centres: list[Centre] = []
         self.errors: list[ProgramError] = []
+        self.results: list[Result] = []
         self.diagnostics: list[Diagnostic] = []
 
     def at(self, lineno: int, clean: str) -> None:
@@ -424,6 +458,8 @@ class _Builder:
             self.touches.append(rec)
         elif isinstance(rec, Centre):
             self.centres.append(rec)
+        elif isinstance(rec, Result):
+            self.results.append(rec)
         else:
             self.errors.append(rec)
 
@@ -483,6 +519,7 @@ class _Builder:
             complete=bool(self.end_line),
             restarts=self.run,
             diagnostics=tuple(self.diagnostics),
+            results=tuple(self.results),
         )
 
 

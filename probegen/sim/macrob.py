@@ -145,6 +145,8 @@ class RunResult:
         message: the comment of the ``#3006`` block when ``stopped == "message"``.
         m_codes: the M codes executed, in order.
         tool: the tool in the spindle at the end (the last ``T`` before an M6).
+        rotation: the G68 rotation in force at the end (centre X, Y in work
+            coordinates, program unit; degrees), or None.
     """
 
     output: str
@@ -155,6 +157,7 @@ class RunResult:
     message: str = ""
     m_codes: tuple[int, ...] = field(default=())
     tool: int = 0
+    rotation: tuple[float, float, float] | None = None
 
 
 def run_program(
@@ -210,6 +213,7 @@ def run_program(
         message=interpreter.message,
         m_codes=tuple(interpreter.m_codes),
         tool=interpreter.motion.tool,
+        rotation=interpreter.motion.rotation,
     )
 
 

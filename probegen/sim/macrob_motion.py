@@ -12,9 +12,16 @@ The machine position is the truth: changing an offset, the unit or the tool leng
 does not move the machine, it changes the work coordinates read back (``#5041``).
 An axis not named in a move keeps its machine coordinate.
 
+Rotation ``G68 X Y R`` (plane G17): program coordinates ``p`` become work coordinates
+``R(p - c) + c`` (``c`` the centre X Y in absolute work coordinates, the current
+position for an axis not given; ``R`` degrees, counter-clockwise) until ``G69``.  Under
+G68 every position variable (#5001-, #5041-, #5061-) reads program coordinates, and
+a move naming only some axes keeps the others' program coordinates.  The block's X Y
+set the centre; it does not move.
+
 Supported: G0 G1 G31 (skip) G4 G10 (L2, L20, L1/L10-L13) G28 G53 G17-G19 G20 G21
-G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G69 G80 G90 G91 G94 G96-G99
-G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42, rotation G68,
+G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G68 (G17 only) G69 G80 G90
+G91 G94 G96-G99 G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42,
 scaling G51, canned cycles, G52, G92, G95 ...) raise alarm 9010 (not supported by
 the virtual machine); a G code Fanuc does not have raises alarm 10.  Axes other than
 X, Y, Z raise alarm 9010: a dropped move would crash a real machine.
@@ -59,7 +66,7 @@ MODAL_GROUPS: dict[int, int] = {
     0: 1, 10: 1, 170: 2, 180: 2, 190: 2, 900: 3, 910: 3, 940: 5, 200: 6, 210: 6, 400: 7,
     430: 8, 440: 8, 490: 8, 800: 9, 980: 10, 990: 10, 500: 11, 670: 12, 960: 13, 970: 13,
     540: 14, 550: 14, 560: 14, 570: 14, 580: 14, 590: 14, 541: 14, 610: 15, 620: 15,
-    630: 15, 640: 15, 690: 16, 150: 17, 501: 22,
+    630: 15, 640: 15, 680: 16, 690: 16, 150: 17, 501: 22,
 }
 """Supported modal G codes (in tenths: G54.1 is 541) and their group."""
 DEFAULT_MODAL: dict[int, float] = {
@@ -72,7 +79,7 @@ DWELL, DATA, REFERENCE, SKIP, MACHINE = 40, 100, 280, 310, 530
 ONE_SHOT = frozenset({DWELL, DATA, REFERENCE, SKIP, MACHINE})
 FANUC_G = frozenset(
     [int(g * 10) for g in (2, 3, 5, 7.1, 9, 11, 16, 22, 23, 27, 29, 30, 33, 37, 39, 40.1, 41,
-                           41.1, 42, 42.1, 45, 46, 47, 48, 51, 51.1, 52, 60, 65, 66, 68, 92,
+                           41.1, 42, 42.1, 45, 46, 47, 48, 51, 51.1, 52, 60, 65, 66, 92,
                            92.1, 95)]
     + list(range(730, 900, 10))
 )
@@ -114,6 +121,8 @@ class Motion:
         self.skip_point: Point = (0.0, 0.0, 0.0)
         self.version = -1
         self.offset: Point = (0.0, 0.0, 0.0)
+        self.rotation: tuple[float, float, float] | None = None
+        """G68 in force: centre X, Y (work coordinates, program unit) and degrees."""
         self.sync()
 
     # -- coordinates ----------------------------------------------------------------
@@ -135,15 +144,29 @@ class Motion:
             self.refresh()
 
     def to_work(self, point: Point) -> list[float]:
-        """Machine coordinates (mm) → work coordinates (program unit)."""
+        """Machine coordinates (mm) → work (program) coordinates (program unit)."""
         unit, off = self.unit, self.offset
-        return [point[i] / unit - off[i] for i in range(3)]
+        work = [point[i] / unit - off[i] for i in range(3)]
+        return self.rotate(work, -1.0) if self.rotation else work
 
     def to_machine(self, work: list[float], named: set[int]) -> Point:
-        """Work coordinates → machine; axes not in ``named`` keep their machine value."""
+        """Work (program) coordinates → machine; axes not in ``named`` keep their
+        machine value (under G68: their program value)."""
         unit, off, pos = self.unit, self.offset, self.position
+        if self.rotation:
+            work = self.rotate(work, 1.0)
+            named = named | ({0, 1} if named & {0, 1} else set())
         x, y, z = ((work[i] + off[i]) * unit if i in named else pos[i] for i in range(3))
         return x, y, z
+
+    def rotate(self, p: list[float], sense: float) -> list[float]:
+        """G68: program → work coordinates (``sense`` 1) or back (-1)."""
+        assert self.rotation is not None
+        cx, cy, degrees = self.rotation
+        a = math.radians(degrees) * sense
+        u, v = p[0] - cx, p[1] - cy
+        return [cx + u * math.cos(a) - v * math.sin(a), cy + u * math.sin(a) + v * math.cos(a),
+                p[2]]
 
     def length(self, value: float, integer: bool) -> float:
         """An axis value as written: an integer literal counts input increments."""
@@ -161,6 +184,12 @@ class Motion:
         if one_shot == DATA:
             self.g10(addr)
             return
+        if 680 in self.codes:
+            self.g68(addr)
+            return
+        if 690 in self.codes and self.rotation is not None:
+            self.rotation = None
+            self.work = self.to_work(self.position)
         axes = self.axes(addr, one_shot)
         if one_shot == DWELL:
             self.dwell(addr)
@@ -305,6 +334,20 @@ class Motion:
     def change_tool(self) -> None:
         """M6: the selected tool goes into the spindle."""
         self.tool = self.next_tool
+
+    # -- G68 ----------------------------------------------------------------------------
+    def g68(self, addr: dict[str, tuple[float, bool]]) -> None:
+        """G68 X Y R: rotate the program frame (plane G17, absolute centre)."""
+        if self.modal[2] != 17.0:
+            raise alarm(UNSUPPORTED, "G68 OUTSIDE G17")
+        here = self.to_work(self.position)
+        if self.rotation is not None:
+            here = self.rotate(here, 1.0)
+        cx, cy = (self.length(*addr[a]) if a in addr else here[i]
+                  for i, a in enumerate("XY"))
+        degrees = addr.get("R", (0.0, False))[0]
+        self.rotation = (cx, cy, degrees)
+        self.work = self.to_work(self.position)
 
     # -- G10 ----------------------------------------------------------------------------
     def g10(self, addr: dict[str, tuple[float, bool]]) -> None:

@@ -163,11 +163,16 @@ class SimResult:
         output: exactly what the machine sends (the DPRNT log or the DMIS output file).
         alarm: ``"number message (line n)"`` when the run stopped on an alarm, else None.
         touches: how many skip moves touched the part.
+        variables: Macro B only: the control's variables at the end (offsets as
+            ``#5221``-, ``#10001``-, see ``macrob.RunResult``).
+        rotation: Macro B only: the G68 rotation in force at the end, or None.
     """
 
     output: str
     alarm: str | None
     touches: int
+    variables: dict[int, float] = field(default_factory=dict)
+    rotation: tuple[float, float, float] | None = None
 
 
 HOME: Vec3 = (0.0, 0.0, 500.0)
@@ -203,7 +208,36 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     alarm = None
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"
-    return SimResult(res.output, alarm, len(vm.touches))
+    return SimResult(res.output, alarm, len(vm.touches), res.variables, res.rotation)
+
+
+_TOOL_KINDS = ("H wear", "H geometry", "D wear", "D geometry")
+
+
+def control_state(result: SimResult) -> list[str]:
+    """What a Macro B run left in the control, one line each: work offsets that are not
+    zero (``G54 X300.7958 Y199.6344 Z-99.7000``), tool offsets (``T12 D wear 0.0150``),
+    the G68 rotation; for ``probegen sim`` (docs/actions.md)."""
+    from probegen.sim.macrob_vars import EXTENDED, work_offset_slot
+
+    sets: dict[int, dict[int, float]] = {}
+    tools: list[str] = []
+    for number, value in sorted(result.variables.items()):
+        slot = work_offset_slot(number)
+        if slot is not None and slot[1] < 3:
+            sets.setdefault(slot[0], {})[slot[1]] = value
+        elif 10001 <= number <= 13999:
+            kind, tool = divmod(number - 10000, 1000)
+            tools.append(f"T{tool} {_TOOL_KINDS[kind]} {value:.4f}")
+    names = {0: "EXT", **{k: f"G{53 + k}" for k in range(1, 7)}}
+    out = [" ".join([names.get(key, f"G54.1 P{key - EXTENDED + 1}"),
+                     *(f"{'XYZ'[i]}{v:.4f}" for i, v in sorted(axes.items()))])
+           for key, axes in sorted(sets.items())]
+    out += tools
+    if result.rotation is not None:
+        cx, cy, r = result.rotation
+        out.append(f"G68 X{cx:.4f} Y{cy:.4f} R{r:.6f}")
+    return out
 
 
 def _alarm_text(a: SimAlarm) -> str:

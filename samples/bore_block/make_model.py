@@ -12,7 +12,8 @@ It writes ``bore_block.step`` beside this script.  The export is byte-repeatable
 same way as ``samples/sphere25/make_model.py`` (the FILE_NAME time stamp is pinned to
 ``FIXED_TIMESTAMP``); tests/test_closed_loop_revolved.py checks that a fresh export
 equals the committed file and builds variants (another bore diameter) with
-``make_part``.
+``make_part``; tests/test_actions_closed_loop.py also plants a boss of another
+diameter.
 """
 
 from __future__ import annotations
@@ -34,19 +35,21 @@ _MIN = (Align.MIN, Align.MIN, Align.MIN)
 _BOTTOM = (Align.CENTER, Align.CENTER, Align.MIN)
 
 
-def make_part(bore_diameter: float = BORE_DIAMETER) -> Part:
+def make_part(bore_diameter: float = BORE_DIAMETER,
+              boss_diameter: float = BOSS_DIAMETER) -> Part:
     """Return the block with its bore and boss as one solid."""
     block = Box(*BLOCK, align=_MIN)
     bore = Pos(*BORE_CENTRE, -1.0) * Cylinder(bore_diameter / 2, BLOCK[2] + 2.0, align=_BOTTOM)
-    boss = Pos(*BOSS_CENTRE, BLOCK[2]) * Cylinder(BOSS_DIAMETER / 2, BOSS_HEIGHT, align=_BOTTOM)
+    boss = Pos(*BOSS_CENTRE, BLOCK[2]) * Cylinder(boss_diameter / 2, BOSS_HEIGHT, align=_BOTTOM)
     part = block - bore + boss
     part.label = "bore_block"
     return part
 
 
-def main(target: Path = TARGET, bore_diameter: float = BORE_DIAMETER) -> Path:
+def main(target: Path = TARGET, bore_diameter: float = BORE_DIAMETER,
+         boss_diameter: float = BOSS_DIAMETER) -> Path:
     """Write the STEP file (by default ``bore_block.step`` beside this script)."""
-    export_step(make_part(bore_diameter), target, timestamp=FIXED_TIMESTAMP)
+    export_step(make_part(bore_diameter, boss_diameter), target, timestamp=FIXED_TIMESTAMP)
     return target
 
 
