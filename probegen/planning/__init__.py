@@ -14,10 +14,11 @@ from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
+from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.order import Stop, Tour, order_stops
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
-from probegen.spec import RevolvedSpec, Spec
+from probegen.spec import FreeformSpec, RevolvedSpec, Spec
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,7 +30,9 @@ class PlannedProgram:
         sphere_tests: the M1 plans, one per sphere-test feature.
         clearance: the collision check's report (smallest clearance per segment).
         revolved: the M2 plans of the revolved features, in measuring order.
-        tour: the order of the revolved features (travel at the clearance plane).
+        tour: the order of the revolved and free-form features (travel at the
+            clearance plane).
+        freeform: the M3 plans of the free-form features, in measuring order.
     """
 
     program: ir.Program
@@ -37,6 +40,7 @@ class PlannedProgram:
     clearance: ClearanceReport
     revolved: tuple[RevolvedPlan, ...] = ()
     tour: Tour | None = None
+    freeform: tuple[FreeformPlan, ...] = ()
 
 
 def make_setup(spec: Spec) -> ir.Setup:
@@ -76,9 +80,13 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
     revolved: list[RevolvedPlan] = []
+    freeform: list[FreeformPlan] = []
+    setup = make_setup(spec)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             revolved.append(plan_revolved(feature, spec.model, machine, spec.clearance_z))
+        elif isinstance(feature, FreeformSpec):
+            freeform.append(plan_freeform(feature, spec.model, machine, setup))
         else:
             sphere = resolve_sphere(feature, spec.model)
             p = plan_points(feature, sphere, machine)
@@ -92,13 +100,18 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         if progress is not None:
             progress(1)
     tour = None
-    if revolved:
-        stops = [Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
+    if revolved or freeform:
+        stops = ([Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
+                 + [Stop(f.entry, f.exit) for f in freeform])
         tour = order_stops(stops, clearance_z=spec.clearance_z)
-        revolved = [revolved[k] for k in tour.order]
-        for r in revolved:
-            body += revolved_nodes(r, machine, spec.clearance_z)
-    program = ir.Program(make_setup(spec), tuple(body))
+        count = len(revolved)
+        for k in tour.order:
+            body += (revolved_nodes(revolved[k], machine, spec.clearance_z) if k < count
+                     else freeform[k - count].nodes)
+        revolved = [revolved[k] for k in tour.order if k < count]
+        freeform = [freeform[k - count] for k in tour.order if k >= count]
+    program = ir.Program(setup, tuple(body))
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
     report = check_program(program, obstacle, plans, machine, progress=progress)
-    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour)
+    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour,
+                          tuple(freeform))
