@@ -19,6 +19,10 @@ from typing import Any
 from probegen import __version__
 from probegen.errors import ProbegenError
 
+DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
+"""``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
+CMM's and a CMM's results), any other as a DPRNT log."""
+
 
 class ExitCode(IntEnum):
     """Process exit codes."""
@@ -65,9 +69,18 @@ def _compile(args: argparse.Namespace) -> int:
             print(f"  {p.feature.id}: {len(p.directions)} points ({p.feature.layout}), "
                   f"largest step {math.degrees(p.alpha):.2f} deg, retract {p.retract:.3f} mm "
                   f"(safe minimum {p.min_retract:.3f} mm)")
+        _print_freeform(planned, "  ")
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
     return ExitCode.OK
+
+
+def _print_freeform(planned: Any, indent: str) -> None:
+    from probegen.planning.freeform_spec import summary_lines
+
+    for p in planned.freeform:
+        for line in summary_lines(p):
+            print(indent + line)
 
 
 def _target(out: Path, stem: str, ext: str, count: int) -> Path:
@@ -91,6 +104,7 @@ def _features(args: argparse.Namespace) -> int:
 
 
 def _plan(args: argparse.Namespace) -> int:
+    from probegen import ir
     from probegen.planning import plan_program
     from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
     from probegen.spec import load_spec
@@ -105,11 +119,16 @@ def _plan(args: argparse.Namespace) -> int:
     else:
         spec = load_spec(args.input)
     planned = plan_program(spec, runtime_variables=True)
-    sys.stdout.write(metrics_table(planned.revolved, spec.machine))
+    if planned.revolved or not planned.freeform:
+        sys.stdout.write(metrics_table(planned.revolved, spec.machine))
     for p in planned.sphere_tests:
         print(f"{p.feature.id}: sphere test (M1), {len(p.directions)} points: not compared")
+    _print_freeform(planned, "")
     if planned.tour is not None:
-        print(f"order: {' '.join(p.spec.id for p in planned.revolved)}; travel at z = "
+        toured = {r.spec.id for r in planned.revolved} | {f.spec.id for f in planned.freeform}
+        order = [n.feature.id for n in planned.program.body
+                 if isinstance(n, ir.FeatureBlock) and n.feature.id in toured]
+        print(f"order: {' '.join(order)}; travel at z = "
               f"{spec.clearance_z:.1f}: {planned.tour.length:.1f} mm (nearest neighbour "
               f"{planned.tour.nearest_length:.1f} mm)")
     print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
@@ -152,7 +171,12 @@ def _ingest(args: argparse.Namespace) -> int:
 
     spec = load_spec(args.spec)
     cal = load_calibration(args.calibration) if args.calibration else None
-    result = ingest(args.log, spec, calibration=cal, with_path=True)
+    if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
+        from probegen.ingest import ingest_dmis
+
+        result = ingest_dmis(args.log, spec)
+    else:
+        result = ingest(args.log, spec, calibration=cal, with_path=True)
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
     for note in result.notes:
@@ -168,8 +192,9 @@ def _ingest(args: argparse.Namespace) -> int:
         target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
                           encoding="utf-8", newline="\n")
         print(f"wrote the probe calibration {target}")
-    failed = any(r.ok is False for r in result.results) or any(
-        r.ok is False for r in result.revolved)
+    failed = (any(r.ok is False for r in result.results)
+              or any(r.ok is False for r in result.revolved)
+              or any(r.ok is False for r in result.freeform))
     return ExitCode.NOT_OK if failed else ExitCode.OK
 
 
@@ -351,8 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="largest polar angle in degrees (cap only)")
     s.set_defaults(func=_sphere_points)
 
-    i = sub.add_parser("ingest", help="evaluate a returned log (DPRNT) against a spec")
-    i.add_argument("log", help="the raw log as captured")
+    i = sub.add_parser("ingest", help="evaluate a returned log (DPRNT) or a DMIS output "
+                                      "file (free-form features) against a spec")
+    i.add_argument("log", help="the raw log as captured, or a DMIS output file (.dms, .dmi)")
     i.add_argument("--spec", required=True, help="the spec the program was compiled from")
     i.add_argument("-o", "--output", default="out",
                    help="folder for results.json and results.csv (default: out/)")

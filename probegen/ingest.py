@@ -25,10 +25,17 @@ import numpy as np
 from probegen.compensate import ProbeCalibration, compensate
 from probegen.errors import ProbegenError
 from probegen.evaluate import SphereTestResult, evaluate_sphere_test
+from probegen.evaluate_freeform import (
+    FreeformResult,
+    NominalPoint,
+    Touches,
+    complete_guides,
+    evaluate_freeform,
+)
 from probegen.evaluate_revolved import RevolvedResult, evaluate_revolved
 from probegen.ingest_actions import Decision, decisions
-from probegen.results import DprntLog, read_dprnt
-from probegen.spec import RevolvedSpec, Spec
+from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
+from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
 
 Vec3 = tuple[float, float, float]
@@ -54,6 +61,7 @@ class Ingested:
         revolved: one evaluated result per circle or cylinder feature with touches.
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
+        freeform: one evaluated result per free-form feature with touches.
     """
 
     source: str
@@ -63,6 +71,7 @@ class Ingested:
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
     revolved: tuple[RevolvedResult, ...] = ()
     decisions: tuple[Decision, ...] = ()
+    freeform: tuple[FreeformResult, ...] = ()
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
@@ -82,11 +91,17 @@ def ingest(log_path: str | Path, spec: Spec, *,
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
     results = []
     revolved: list[RevolvedResult] = []
+    freeform: list[FreeformResult] = []
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             found_r = _revolved(feature, spec, touches, notes)
             if found_r is not None:
                 revolved.append(found_r)
+            continue
+        if isinstance(feature, FreeformSpec):
+            found_f = ingest_freeform(feature, spec, touches, notes, calibration)
+            if found_f is not None:
+                freeform.append(found_f)
             continue
         if isinstance(feature, PlanarSpec):  # lines and planes: decisions only
             continue
@@ -110,7 +125,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
             calibrated_diameter=sphere.diameter,
             ball_radius=r if isinstance(r, float) else r.effective_radius,
             form=tol.form, size=tol.size, position=tol.position))
-    if not results and not revolved:
+    if not results and not revolved and not freeform:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
@@ -120,7 +135,83 @@ def ingest(log_path: str | Path, spec: Spec, *,
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
     return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
-                    decisions(spec, log))
+                    decisions(spec, log), tuple(freeform))
+
+
+def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
+                    calibration: ProbeCalibration | None = None) -> FreeformResult | None:
+    """Evaluate one free-form feature from ball centres by (feature, touch index).
+
+    The feature is planned again (with its collision checks) for the theoretical contact
+    points and normals; guide points missing a touch are left out with a note.
+    """
+    from probegen.planning import make_setup
+    from probegen.planning.freeform_spec import plan_freeform
+
+    plan = plan_freeform(feature, spec.model, spec.machine, make_setup(spec))
+    nominal = [NominalPoint(t.guide, t.contact, t.normal) for t in plan.touches
+               if t.role == 0]
+    full, missing = complete_guides(feature.id, feature.method, nominal, touches)
+    if missing:
+        notes.append(f"feature {feature.id}: guide points {_ranges(missing)} lack touches, "
+                     "not evaluated")
+    if not full:
+        notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
+                     "touches")
+        return None
+    r = spec.machine.probe.ball_radius if calibration is None else calibration
+    return evaluate_freeform(feature.id, feature.method, full, touches,
+                             direction=feature.direction, radius=r,
+                             deviation=feature.deviation)
+
+
+def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
+    """Ball centres of the free-form touches in a DMIS output file, by (feature, index).
+
+    Touch ``k`` of feature ``F`` is the point actual ``FA(F_k)``; the CMM reports the
+    contact compensated along the PTMEAS vector, so the ball centre is the point plus
+    the ball radius along that vector.
+    """
+    ids = {f.id for f in spec.features if isinstance(f, FreeformSpec)}
+    r = spec.machine.probe.ball_radius
+    out: dict[tuple[str, int], Vec3] = {}
+    for fa in output.features:
+        name, _, index = fa.name.rpartition("_")
+        if fa.type == "POINT" and name in ids and index.isdigit() and fa.direction:
+            p, n = np.array(fa.position), np.array(fa.direction)
+            x, y, z = (p + r * n).tolist()
+            out[(name, int(index))] = (x, y, z)
+    return out
+
+
+def ingest_dmis(path: str | Path, spec: Spec) -> Ingested:
+    """``probegen ingest`` of a DMIS output file: the free-form features of ``spec``
+    (the CMM reports the other kinds itself; ``probegen qif`` exports them).
+
+    ``log`` is an empty DPRNT log that carries the file's diagnostics; ``complete`` is
+    whether the output holds at least one feature actual.
+
+    Raises:
+        ProbegenError: the file cannot be read, or holds no free-form touches of the spec.
+    """
+    output = read_dmis_output(path)
+    results, notes = ingest_dmis_freeform(output, spec)
+    if not results:
+        raise ProbegenError(f"{path}: expected point actuals FA(<id>_<k>) of the spec's "
+                            "free-form features, found none usable; " + "; ".join(notes))
+    log = DprntLog(str(path), None, (), (), (), bool(output.features), 0, output.diagnostics)
+    return Ingested(str(path), log, (), notes, freeform=results)
+
+
+def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[FreeformResult, ...],
+                                                                   tuple[str, ...]]:
+    """Evaluate the free-form features of ``spec`` from a DMIS output file (the CMM
+    evaluates the other kinds itself); returns the results and the notes."""
+    touches = dmis_touches(output, spec)
+    notes: list[str] = []
+    found = [ingest_freeform(f, spec, touches, notes) for f in spec.features
+             if isinstance(f, FreeformSpec)]
+    return tuple(r for r in found if r is not None), tuple(notes)
 
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
@@ -179,7 +270,8 @@ def to_json(ing: Ingested) -> str:
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
         "features": [_feature_json(r) for r in ing.results]
-        + [_revolved_json(r) for r in ing.revolved],
+        + [_revolved_json(r) for r in ing.revolved]
+        + [freeform_json(r) for r in ing.freeform],
         "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
                   "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
@@ -237,6 +329,27 @@ def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
     }
 
 
+def freeform_json(r: FreeformResult) -> dict[str, Any]:
+    """A free-form feature in ``results.json``: ``points`` are the compensated contact
+    points, ``directions`` the nominal normals, ``residuals`` the deviations along them
+    (the deviation map), ``nominal`` the theoretical contact points."""
+    s = r.summary
+    return {
+        "id": r.feature,
+        "kind": "freeform",
+        "method": r.method,
+        "ok": r.ok,
+        "n": len(r.points),
+        "guides": list(r.guides),
+        "touch_stride": FREEFORM_STRIDE,
+        "deviation": {"min": _f(s.min), "max": _f(s.max), "mean": _f(s.mean),
+                      "rms": _f(s.rms)},
+        "nominal": [[_f(v) for v in p] for p in r.nominal],
+        "normals_used": [[_f(v) for v in n] for n in r.normals_used],
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
+    }
+
+
 def _status(ok: bool | None) -> str:
     return "-" if ok is None else ("OK" if ok else "NOT OK")
 
@@ -255,7 +368,8 @@ def to_csv(ing: Ingested) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
                 "upper", "status"])
-    rs: list[SphereTestResult | RevolvedResult] = [*ing.results, *ing.revolved]
+    rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
+        *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
@@ -267,7 +381,8 @@ def to_csv(ing: Ingested) -> str:
 def to_table(ing: Ingested) -> str:
     """The table ``probegen ingest`` prints."""
     rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status")]
-    rs: list[SphereTestResult | RevolvedResult] = [*ing.results, *ing.revolved]
+    rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
+        *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",

@@ -126,6 +126,11 @@ class Touch:
         approach: distance of the start point off the surface (ball surface to part), mm.
         overtravel: how far past the nominal contact the move may go, mm.
         store: run-time variable names that receive the skip position's X, Y, Z (or None).
+        surface: the outward surface normal where the ball meets the part, when the
+            touch does not run along it (M3 vertical probing of a slope; ``contact`` is
+            then the point ``r`` below the theoretical ball centre along ``normal``);
+            None when ``normal`` is the surface normal.  Only the collision check reads
+            it: it stops the ball ``margin`` short of the surface, not of ``contact``.
     """
 
     feature: str
@@ -136,6 +141,7 @@ class Touch:
     approach: float
     overtravel: float
     store: tuple[str | None, str | None, str | None] = (None, None, None)
+    surface: Vec3 | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -224,8 +230,27 @@ class LineDef:
     normal: Vec3
     inner: bool = False
 
+@dataclass(frozen=True, slots=True)
+class FreeformDef:
+    """A free-form face measured point by point (method M3).  DMIS measures each touch
+    ``k`` as its own ``FEAT/POINT`` labelled ``<id>_<k>`` (nominal point and vector
+    from the touch); controllers without features print a comment.
 
-FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef | PlaneDef | LineDef
+    Attributes:
+        id: feature id.
+        face: model face id.
+        method: ``vector``, ``microplane``, ``vertical2d`` or ``vertical``.
+        points: number of guide points.
+    """
+
+    id: str
+    face: int
+    method: str
+    points: int
+    inner: bool = False
+
+
+FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef | PlaneDef | LineDef | FreeformDef
 
 
 @dataclass(frozen=True, slots=True)

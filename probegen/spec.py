@@ -37,6 +37,19 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     retract = 2.0                  # optional; the M2 safe distance
     tolerance = { diameter = [0.0, 0.025], position = 0.05, form = 0.01 }
 
+    [[feature]]                    # a free-form face (method M3)
+    id = "SURF"
+    kind = "freeform"
+    face = 6                       # or at = [x, y, z]
+    grid = "uv"                    # uv | xy
+    points = [5, 4]                # grid points per direction, or spacing = 5.0 (mm)
+    margin = 3.0                   # least distance from every edge of the face
+    direction = [0, 0, 1]          # guide direction (default +Z, within 60 deg of it)
+    method = "vector"              # vector | microplane | vertical2d | vertical
+    extra_spacing = 0.5            # extra touches, 0.05-0.5 mm from the guide point
+    retract = 2.0                  # optional; approach distance of every touch
+    tolerance = { deviation = [-0.05, 0.05] }   # along the nominal normal
+
 Every problem is a ``SpecError`` naming the file, the key path and the value found.
 """
 
@@ -57,9 +70,23 @@ Vec3 = tuple[float, float, float]
 
 REVOLVED_KINDS = ("circle", "cylinder", "cone", "sphere")
 """Revolved feature kinds (method M2), measured in sections of a model's surface."""
-FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS, *PLANAR_KINDS)
+FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS, *PLANAR_KINDS, "freeform")
 """Feature kinds this version plans (method M1: sphere_test; method M2: the revolved
-kinds; ``line``/``plane``: touches at given points of a planar face, spec_actions)."""
+kinds; ``line``/``plane``: touches at given points of a planar face, spec_actions;
+method M3: freeform)."""
+FREEFORM_METHODS = ("vector", "microplane", "vertical2d", "vertical")
+"""How a free-form point is probed and compensated (method M3): along the nominal
+normal; vertically with three extra touches on a circle (micro-plane normal); vertically
+with two extra touches (2-D profile normal); vertically alone (naive, ``r·ẑ``)."""
+FREEFORM_EXTRA = {"vector": 0, "microplane": 3, "vertical2d": 2, "vertical": 0}
+"""Extra touches per guide point of each method (for the normal estimate)."""
+FREEFORM_STRIDE = 10
+"""Touch ``j`` (0 = the guide line's own, 1-3 the extra ones) of guide point ``g`` has
+index ``FREEFORM_STRIDE · g + j``: a log line names its guide point and role."""
+FREEFORM_GRIDS = ("uv", "xy")
+"""Guide-point grids: in the face's parameter space, or an XY grid projected onto it."""
+EXTRA_SPACING = (0.05, 0.5)
+"""Allowed distance (mm) of the extra touches from the guide point (methods.md, M3)."""
 DEFAULT_POINTS = 8
 """Default touches per section of a revolved feature."""
 
@@ -167,7 +194,44 @@ class RevolvedSpec:
     actions: Actions = Actions()
 
 
-Feature = SphereTest | RevolvedSpec | PlanarSpec
+@dataclass(frozen=True, slots=True)
+class FreeformSpec:
+    """A free-form face measured at guide points (method M3).
+
+    Attributes:
+        id: feature id.
+        where: ``file: feature[i]`` for error messages.
+        face: the model face id, or None.
+        at: a point near the face, or None.
+        grid: ``uv`` or ``xy`` (see :data:`FREEFORM_GRIDS`).
+        counts: grid points in u and v (x and y), or None with ``spacing``.
+        spacing: grid pitch, mm, or None with ``counts``.
+        margin: least distance of a guide point from every edge of the face, mm.
+        direction: unit guide direction, out of the material (the probe comes down
+            along ``-direction`` for the vertical methods).
+        method: one of :data:`FREEFORM_METHODS`.
+        extra_spacing: distance of the extra touches from the guide point, mm.
+        retract: approach distance of every touch, mm, or None for the probe's.
+        deviation: lowest and highest allowed deviation along the nominal normal
+            (+ = material added), mm, or None.
+    """
+
+    id: str
+    where: str
+    face: int | None
+    at: Vec3 | None
+    grid: str
+    counts: tuple[int, int] | None
+    spacing: float | None
+    margin: float
+    direction: Vec3
+    method: str
+    extra_spacing: float
+    retract: float | None
+    deviation: tuple[float, float] | None = None
+
+
+Feature = SphereTest | RevolvedSpec | PlanarSpec | FreeformSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -265,9 +329,15 @@ def _feature(t: Table, k: float) -> Feature:
     if kind not in FEATURE_KINDS:
         raise SpecError(f"{t.where('kind')}: expected one of {', '.join(FEATURE_KINDS)}, "
                         f"found {kind!r}{did_you_mean(kind, FEATURE_KINDS)}")
-    feature: Feature = (_sphere_test(t, fid, k) if kind == "sphere_test"
-                        else read_planar(t, fid, kind, k) if kind in PLANAR_KINDS
-                        else _revolved(t, fid, kind, k))
+    feature: Feature
+    if kind == "sphere_test":
+        feature = _sphere_test(t, fid, k)
+    elif kind == "freeform":
+        feature = _freeform(t, fid, k)
+    elif kind in PLANAR_KINDS:
+        feature = read_planar(t, fid, kind, k)
+    else:
+        feature = _revolved(t, fid, kind, k)
     t.done()
     return feature
 
@@ -326,13 +396,19 @@ def _sphere_tolerance(t: Table, k: float) -> SphereTolerance:
     return SphereTolerance(**{key: None if v is None else v * k for key, v in values.items()})
 
 
-def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
+def _face_or_at(t: Table, k: float) -> tuple[int | None, Vec3 | None]:
+    """The ``face`` id or the ``at`` point (exactly one)."""
     face = t.get_int("face", minimum=1)
     at = _scaled(t.get_vec("at"), k)
     given = [key for key, v in (("face", face), ("at", at)) if v is not None]
     if len(given) != 1:
         raise SpecError(f"{t.where('face')}: expected exactly one of face, at, "
                         f"found {', '.join(given) or 'none'}")
+    return face, at
+
+
+def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
+    face, at = _face_or_at(t, k)
     sections = _depths(t, k)
     if kind == "circle" and sections is not None and len(sections) != 1:
         raise t.fail("sections", "one depth for a circle (use kind = \"cylinder\" for more)")
@@ -369,3 +445,57 @@ def _revolved_tolerance(t: Table, k: float) -> RevolvedTolerance:
     t.done()
     return RevolvedTolerance(diameter, **{key: None if v is None else v * k
                                           for key, v in values.items()})
+
+
+def _freeform(t: Table, fid: str, k: float) -> FreeformSpec:
+    face, at = _face_or_at(t, k)
+    grid = t.get_str("grid", "uv", choices=FREEFORM_GRIDS) or "uv"
+    counts = _grid_counts(t)
+    spacing = t.get_float("spacing", positive=True)
+    if (counts is None) == (spacing is None):
+        raise SpecError(f"{t.where('points')}: expected exactly one of points, spacing, "
+                        f"found {'both' if counts else 'none'}")
+    margin = t.get_float("margin", 1.0 / k, minimum=0.0)
+    method = t.get_str("method", "vector", choices=FREEFORM_METHODS) or "vector"
+    lo, hi = EXTRA_SPACING
+    extra = t.get_float("extra_spacing", 0.5 / k, minimum=lo / k, maximum=hi / k)
+    retract = t.get_float("retract", positive=True)
+    return FreeformSpec(
+        id=fid, where=f"{t.file}: {t.path}", face=face, at=at, grid=grid, counts=counts,
+        spacing=None if spacing is None else spacing * k, margin=(margin or 0.0) * k,
+        direction=_direction(t), method=method, extra_spacing=(extra or 0.0) * k,
+        retract=None if retract is None else retract * k,
+        deviation=_deviation(t.table("tolerance"), k),
+    )
+
+
+def _grid_counts(t: Table) -> tuple[int, int] | None:
+    value = t.get_any("points")
+    if value is None:
+        return None
+    ok = isinstance(value, list) and len(value) == 2 and all(
+        isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 1000 for v in value)
+    if not ok:
+        raise t.fail("points", "[n_u, n_v]: two integers from 1 to 1000 (grid points per "
+                               "direction)")
+    return (value[0], value[1])
+
+
+def _direction(t: Table) -> Vec3:
+    d = t.get_vec("direction") or (0.0, 0.0, 1.0)
+    size = math.sqrt(sum(v * v for v in d))
+    if size == 0.0 or d[2] / size < math.cos(math.radians(60.0)):
+        raise t.fail("direction", "a vector out of the material within 60 deg of +Z "
+                                  "(the probe comes down along it)")
+    return (d[0] / size, d[1] / size, d[2] / size)
+
+
+def _deviation(t: Table, k: float) -> tuple[float, float] | None:
+    value = None
+    if t.has("deviation"):
+        lo, hi = t.get_vec("deviation", 2) or (0.0, 0.0)
+        if lo > hi:
+            raise t.fail("deviation", "[lower, upper] deviations with lower <= upper")
+        value = (lo * k, hi * k)
+    t.done()
+    return value

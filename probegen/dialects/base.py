@@ -86,6 +86,9 @@ class Dialect:
             return f"FEATURE {f.id} SPHERE D{self.length(f.diameter)}"
         if isinstance(f, ir.CircleDef):
             return f"FEATURE {f.id} CIRCLE {side} D{self.length(f.diameter)}"
+        if isinstance(f, ir.FreeformDef):
+            return (f"FEATURE {f.id} FREEFORM FACE {f.face} {f.method.upper()} "
+                    f"{f.points} POINTS")
         if isinstance(f, ir.CylinderDef):
             return (f"FEATURE {f.id} CYLINDER {side} D{self.length(f.diameter)} "
                     f"L{self.length(f.length)}")

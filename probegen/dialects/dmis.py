@@ -8,6 +8,11 @@ Conventions (see ``docs/dialects.md``):
   ``SNSET/APPRCH`` and ``SNSET/RETRCT`` distances, which are set before each measurement
   to the planned approach distance, so the planned retract moves are implicit.
 * ``SNSET/SEARCH`` is the planned overtravel.
+* A free-form feature (``ir.FreeformDef``, method M3) is measured point by point: touch
+  ``k`` becomes ``F(<id>_<k>)=FEAT/POINT,CART,x,y,z,i,j,k`` (the touch's nominal point
+  and vector: for a vertical touch the point ``r`` below the theoretical ball centre and
+  the guide direction), ``MEAS/POINT,...,1``, one ``PTMEAS``, ``ENDMES`` and
+  ``OUTPUT/FA(<id>_<k>)``; the moves between become ``GOTO``.
 * A ``LocalFrame`` becomes ``D(name)=TRANS/XORIG,FA(f),YORIG,FA(f),ZORIG,FA(f)``; the frame in
   force at the start is saved as ``D(PCS)`` and recalled by ``RestoreFrame``.
 * DMIS has no run-time arithmetic: ``ir.Var``, ``Assign`` and ``ReportCentre`` are
@@ -73,6 +78,8 @@ class Dmis(Dialect):
             return {"kind": "comment", "text": node.text}
         if isinstance(node, ir.Move):
             return self.move(node)
+        if isinstance(node, ir.FeatureBlock) and isinstance(node.feature, ir.FreeformDef):
+            return self.freeform(node, node.feature)
         if isinstance(node, ir.FeatureBlock):
             return self.feature(node)
         if isinstance(node, ir.LocalFrame):
@@ -112,6 +119,27 @@ class Dmis(Dialect):
             "steps": steps,
         }
 
+    def freeform(self, node: ir.FeatureBlock, f: ir.FreeformDef) -> dict[str, Any]:
+        """A free-form feature: each touch ``k`` a ``FEAT/POINT`` ``<id>_<k>`` (nominal
+        point and vector of the touch) measured by one PTMEAS; moves between as GOTO."""
+        items: list[dict[str, Any]] = []
+        for n in node.body:
+            if isinstance(n, ir.Touch):
+                xyz = self.point(n.contact, n)
+                ijk = [self.num(v, 6) for v in n.normal]
+                items.append({
+                    "kind": "feature", "id": f"{f.id}_{n.index}", "n": 1, "word": "POINT",
+                    "feat": ",".join(["POINT", "CART", *xyz, *ijk]),
+                    "approach": self.length(n.approach), "search": self.length(n.overtravel),
+                    "steps": [{"kind": "ptmeas", "xyz": xyz, "ijk": ijk}]})
+            elif isinstance(n, ir.Move) and n.mode is not ir.MoveMode.RETRACT:
+                items.append(self.move(n))
+            elif isinstance(n, ir.Comment):
+                items.append({"kind": "comment", "text": n.text})
+            elif not isinstance(n, ir.Move):
+                raise self.unsupported(n, "not inside a DMIS free-form measurement")
+        return {"kind": "freeform", "title": self.feature_title(f), "entries": items}
+
     def definition(self, f: ir.FeatureDef, node: object) -> tuple[str, str]:
         """The MEAS word and the ``FEAT/`` text of a nominal feature."""
         side = "INNER" if f.inner else "OUTER"
@@ -130,6 +158,8 @@ class Dmis(Dialect):
             values = [*self.point(f.apex, node), *ijk,
                       self.num(2.0 * math.degrees(f.half_angle), 6)]
             return "CONE", ",".join(["CONE", side, "CART", *values])
+        if isinstance(f, ir.FreeformDef):
+            raise self.unsupported(node, "a free-form feature is measured point by point")
         ijk = [self.num(v, 6) for v in f.axis]
         values = [*self.point(f.centre, node), *ijk, self.length(f.diameter)]
         if isinstance(f, ir.CylinderDef):

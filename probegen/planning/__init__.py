@@ -20,11 +20,12 @@ from probegen.planning.actions import (
     sphere_offset,
 )
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
+from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.order import Stop, Tour, order_stops
 from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
-from probegen.spec import RevolvedSpec, Spec
+from probegen.spec import FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
 
 
@@ -37,7 +38,9 @@ class PlannedProgram:
         sphere_tests: the M1 plans, one per sphere-test feature.
         clearance: the collision check's report (smallest clearance per segment).
         revolved: the M2 plans of the revolved features, in measuring order.
-        tour: the order of the revolved features (travel at the clearance plane).
+        tour: the order of the revolved and free-form features (travel at the
+            clearance plane).
+        freeform: the M3 plans of the free-form features, in measuring order.
     """
 
     program: ir.Program
@@ -45,6 +48,7 @@ class PlannedProgram:
     clearance: ClearanceReport
     revolved: tuple[RevolvedPlan, ...] = ()
     tour: Tour | None = None
+    freeform: tuple[FreeformPlan, ...] = ()
 
 
 def make_setup(spec: Spec) -> ir.Setup:
@@ -86,9 +90,13 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     revolved: list[RevolvedPlan] = []
     checked: list[tuple[RevolvedSpec | PlanarSpec, ir.Check]] = []
     spheres: list[ir.SetWorkOffset] = []
+    freeform: list[FreeformPlan] = []
+    setup = make_setup(spec)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             revolved.append(plan_revolved(feature, spec.model, machine, spec.clearance_z))
+        elif isinstance(feature, FreeformSpec):
+            freeform.append(plan_freeform(feature, spec.model, machine, setup))
         elif isinstance(feature, PlanarSpec):
             planar = plan_planar(feature, spec.model, machine)
             axes, check = planar_check(planar, machine)
@@ -111,18 +119,25 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         if progress is not None:
             progress(1)
     tour = None
-    if revolved:
-        stops = [Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
+    if revolved or freeform:
+        stops = ([Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
+                 + [Stop(f.entry, f.exit) for f in freeform])
         tour = order_stops(stops, clearance_z=spec.clearance_z)
-        revolved = [revolved[k] for k in tour.order]
-        for r in revolved:
-            nodes = revolved_check(revolved_nodes(r, machine, spec.clearance_z), r.spec,
-                                   r.definition, machine)
-            body += nodes
-            checked += [(r.spec, n) for n in nodes if isinstance(n, ir.Check)]
-    setup = make_setup(spec)
+        count = len(revolved)
+        for k in tour.order:
+            if k < count:
+                r = revolved[k]
+                nodes = revolved_check(revolved_nodes(r, machine, spec.clearance_z), r.spec,
+                                       r.definition, machine)
+                body += nodes
+                checked += [(r.spec, n) for n in nodes if isinstance(n, ir.Check)]
+            else:
+                body += freeform[k - count].nodes
+        revolved = [revolved[k] for k in tour.order if k < count]
+        freeform = [freeform[k - count] for k in tour.order if k >= count]
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
     report = check_program(program, obstacle, plans, machine, progress=progress)
-    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour)
+    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour,
+                          tuple(freeform))

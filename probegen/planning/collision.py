@@ -16,7 +16,9 @@ the part at each point.
 
 Touches: the ball must clear the part from the touch's start until it is ``margin``
 (+ the extra) short of the nominal contact; the retract that follows runs back along the
-same line.  The shank must clear the part along the same stretch.
+same line.  The shank must clear the part along the same stretch.  A touch that runs at
+an angle to the surface normal (``Touch.surface``, M3 vertical probing of a slope) stops
+``margin / cos(angle)`` short along its line, i.e. ``margin`` off a plane surface.
 
 Obstacles: the tessellated STEP model as an FCL bounding-volume hierarchy (python-fcl:
 exact sphere/cylinder-to-triangle distances in C++), or analytic spheres when the spec
@@ -348,13 +350,27 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 raise PlanningError(f"feature {feature}: touch {node.index} does not start at "
                                     f"its approach point {_fmt(start)}")
             e = w.extra(node.contact)
-            stop = contact + (r + clear + MIN_STEP + MESH_TOLERANCE + e) * n
+            stop = contact + (r + (clear + MIN_STEP + MESH_TOLERANCE + e) / _slant(node)) * n
             check(start, stop, e, e, f"touch {node.role.value} {node.index}")
             for axis, name in enumerate(node.store):
                 if name is not None:
                     w.values[name] = float((contact + r * n - w.origin())[axis])
             touch_start = start
     return ClearanceReport(tuple(out))
+
+
+SLANT_FACTOR = 0.9
+"""A slanted touch stops its check ``1 / (0.9·cos)`` times farther out: the plane-surface
+figure ``1 / cos`` leaves no room for the curvature of a free-form face."""
+
+
+def _slant(touch: ir.Touch) -> float:
+    """How much of the approach distance is distance from the surface: 1 for a touch
+    along the surface normal, ``SLANT_FACTOR`` times the cosine between approach and
+    surface normal else (at least 0.1)."""
+    if touch.surface is None:
+        return 1.0
+    return max(SLANT_FACTOR * float(np.dot(touch.normal, touch.surface)), 0.1)
 
 
 def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float,

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from probegen.report import palette, plots
+from probegen.report.deviation_plot import deviation_map_svg
 from probegen.report.model import Feature, Function, ProbeRadii, Results, sphere_test_radii
 from probegen.report.numbers import fixed, signed
 from probegen.report.scene import STYLES, Scene, ball_scene, path_scene, scene_json
@@ -94,6 +95,8 @@ def form_plots(feature: Feature) -> FormPlots:
     if not feature.residuals:
         return FormPlots(feature.id, (), "no residuals in the results")
     eps = [e * UM for e in feature.residuals]
+    if feature.kind == "freeform":
+        return _deviation_plots(feature, eps)
     bars = plots.bar_chart(eps, title=f"{feature.id}: radial residual per point",
                            y_label="\u03b5 (\u00b5m)", decimals=3)
     if len(feature.directions) != len(eps):
@@ -108,6 +111,19 @@ def form_plots(feature: Feature) -> FormPlots:
         x_label="polar angle \u03b8 from +Z (\u00b0)", y_label="\u03b5 (\u00b5m)",
         x_ticks=plots.angle_ticks(theta), labels=tips)
     return FormPlots(feature.id, (bars, scatter))
+
+
+def _deviation_plots(feature: Feature, eps: list[float]) -> FormPlots:
+    """A free-form feature (M3): the deviation map over the face and the deviation per
+    guide point (along the nominal normal, + = material added)."""
+    bars = plots.bar_chart(eps, title=f"{feature.id}: deviation along the nominal normal "
+                           "per point", y_label="e (\u00b5m)", decimals=3)
+    if len(feature.points) != len(eps):
+        return FormPlots(feature.id, (bars,))
+    dmap = deviation_map_svg(feature.points, eps, title=f"{feature.id}: deviation map",
+                             normals=feature.directions or ((0.0, 0.0, 1.0),), decimals=3,
+                             labels=[f"point {k}" for k in range(1, len(eps) + 1)])
+    return FormPlots(feature.id, (dmap, bars))
 
 
 def calibration(results: Results) -> Calibration:
