@@ -336,6 +336,42 @@ def _report(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
+def _post(args: argparse.Namespace) -> int:
+    from probegen.dialects import get_dialect
+    from probegen.machine.profile import load_profile
+    from probegen.post.files import post_file, write_post
+
+    out = post_file(args.program, load_profile(args.machine), args.model,
+                    dialect=args.dialect, offset=tuple(args.model_offset),
+                    skip_unsupported=args.skip_unsupported, reroute=args.reroute,
+                    number=args.number)
+    target = _target(Path(args.output), Path(args.program).stem,
+                     get_dialect(args.dialect).EXTENSION, 1)
+    map_path = write_post(out, target)
+    posted = out.posted
+    for s in posted.skipped:
+        print(f"probegen: skipped {args.program}:{s.line}: {s.text} ({s.reason})",
+              file=sys.stderr)
+    print(f"wrote {target} and {map_path}: {len(posted.touches)} touches")
+    if posted.rerouted:
+        print(f"  rerouted over the clearance plane: lines "
+              f"{', '.join(str(n) for n in posted.rerouted)}")
+    print(f"  collision check: {len(posted.segments)} segments, smallest clearance of a "
+          f"positioning move above the margin {posted.move_clearance:.3f} mm")
+    return ExitCode.OK
+
+
+def _post_ingest(args: argparse.Namespace) -> int:
+    from probegen.post.evaluate import ingest_file, results_table
+
+    result = ingest_file(args.log, args.features)
+    Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
+    sys.stdout.write(results_table(result))
+    print(f"wrote {args.output}")
+    failed = any(not t.in_tolerance for t in result.tolerances.values())
+    return ExitCode.NOT_OK if failed else ExitCode.OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
     parser = argparse.ArgumentParser(
@@ -440,7 +476,42 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("-o", "--output", default="report.html", help="the HTML file")
     rp.add_argument("--title", help="title of the report")
     rp.set_defaults(func=_report)
+    _post_parsers(sub)
     return parser
+
+
+def _post_parsers(sub: Any) -> None:
+    """The ``post`` and ``post-ingest`` commands (docs/post.md)."""
+    po = sub.add_parser("post", help="post-process a DMIS program into a machine-tool "
+                                     "probing program (and its feature map)")
+    po.add_argument("program", help="the DMIS program (.dmi, .dms)")
+    po.add_argument("-d", "--dialect", default="fanuc", help="dialect (default fanuc)")
+    po.add_argument("--machine", required=True,
+                    help="machine profile (TOML); its stylus must be the program's sensor")
+    po.add_argument("--model", required=True,
+                    help="the part (STEP), to check every move for collisions")
+    po.add_argument("--model-offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+                    metavar=("X", "Y", "Z"),
+                    help="where the model's origin is in the program's coordinates, mm")
+    po.add_argument("--skip-unsupported", action="store_true",
+                    help="leave out (and list) statements that cannot be translated")
+    po.add_argument("--reroute", action="store_true",
+                    help="lift colliding positioning moves over the clearance plane "
+                         "instead of failing")
+    po.add_argument("--number", type=int, default=1001, help="program number (1001)")
+    po.add_argument("-o", "--output", default="out",
+                    help="program file or folder (default out/); the feature map is "
+                         "written next to it")
+    po.set_defaults(func=_post)
+
+    pi = sub.add_parser("post-ingest", help="evaluate a posted program's DPRNT log: the "
+                                            "DMIS features, tolerances and output file")
+    pi.add_argument("log", help="the DPRNT log as captured")
+    pi.add_argument("--features", required=True,
+                    help="the feature map written by probegen post")
+    pi.add_argument("-o", "--output", default="results.dmo",
+                    help="the DMIS output file (default results.dmo)")
+    pi.set_defaults(func=_post_ingest)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,10 +12,10 @@ from conftest import assert_golden
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from probegen.alarms import SimAlarm
 from probegen.errors import ProbegenError, ProgramParseError
 from probegen.results import parse_dprnt
 from probegen.sim import macrob_ast as ast
-from probegen.sim.alarms import SimAlarm
 from probegen.sim.macrob import FreeMachine, Machine, Point, RunResult, Settings, run_program
 from probegen.sim.macrob_dprnt import format_value
 from probegen.sim.macrob_parse import parse_program, read_program

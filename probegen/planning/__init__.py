@@ -53,10 +53,15 @@ class PlannedProgram:
 
 def make_setup(spec: Spec) -> ir.Setup:
     """The program's setup block from the spec and its machine profile."""
-    m: MachineProfile = spec.machine
+    return setup_for(spec.machine, spec.program_number, spec.program_name, spec.clearance_z)
+
+
+def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> ir.Setup:
+    """The setup block of program ``number``/``name`` for machine ``m`` (clearance in mm,
+    work coordinates)."""
     return ir.Setup(
-        program_number=spec.program_number, program_name=spec.program_name, units=m.units,
-        work_offset=m.work_offset, clearance_z=spec.clearance_z,
+        program_number=number, program_name=name, units=m.units,
+        work_offset=m.work_offset, clearance_z=clearance_z,
         ball_diameter=m.probe.ball_diameter, shank_diameter=m.probe.shank_diameter,
         tool_number=m.probe.tool_number, tool_change=m.controller.tool_change,
         position_feed=m.feeds.position, probe_feed=m.feeds.probe,

@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
 
+from probegen.alarms import SimAlarm
 from probegen.gcpause import collector_paused
-from probegen.sim.alarms import SimAlarm
 from probegen.sim.macrob_base import Settings
 from probegen.sim.macrob_exec import Interpreter
 from probegen.sim.macrob_parse import parse_program

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from probegen.sim.alarms import SimAlarm
+from probegen.alarms import SimAlarm
 
 IMPROPER_G_CODE = 10
 FEED_ZERO = 11

@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from probegen.alarms import SimAlarm
 from probegen.sim import macrob_ast as ast
-from probegen.sim.alarms import SimAlarm
 from probegen.sim.macrob_base import (
     ARGUMENT_RANGE,
     BLOCK_LIMIT,

@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
-from probegen.sim.alarms import SimAlarm
+from probegen.alarms import SimAlarm
 from probegen.sim.macrob_base import VARIABLE_RANGE, WRITE_PROTECTED, alarm
 from probegen.sim.macrob_expr import Getter, Value, checked
 

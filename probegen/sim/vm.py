@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
+from probegen.alarms import SimAlarm
 from probegen.machine.kinematics import Machine
 from probegen.machine.probe_model import ProbeModel
-from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import ContactHit, PlacedPart
 
 Vec3 = tuple[float, float, float]
@@ -194,7 +194,7 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         work_offset: the G54 offset the control holds (Macro B only), mm.
     """
     if kind == "dmis":
-        from probegen.sim.dmis_vm import run_dmis
+        from probegen.dmisrun.interpreter import run_dmis
 
         dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)

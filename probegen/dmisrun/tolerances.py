@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from probegen.constants import tol
-from probegen.sim.dmis_features import DmisFeature, arr
+from probegen.dmisrun.features import DmisFeature, arr
 
 FORM_KINDS = {"FLAT": "PLANE", "CIRLTY": "CIRCLE", "CYLCTY": "CYLNDR", "STRGHT": "LINE"}
 """Form tolerance -> the feature type it applies to."""

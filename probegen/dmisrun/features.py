@@ -17,7 +17,7 @@ centres the CMM recorded.  Stylus compensation, two modes:
   normal equals the nominal one (an error of ``r (1 - cos t)`` for a tilt ``t``).
 
 Points and lines are always vector compensated.  Cylinders are fitted from the
-nominal axis (:mod:`probegen.sim.dmis_fitting`: sparse CMM patterns fit several
+nominal axis (:mod:`probegen.dmisrun.fitting`: sparse CMM patterns fit several
 cylinders exactly); the other shapes use :mod:`probegen.geometry.fits` as they are.
 
 The actual's reported location: the fitted centre for circles and spheres, the apex
@@ -35,6 +35,7 @@ from typing import Literal
 
 import numpy as np
 
+from probegen.dmisrun.fitting import cylinder_near
 from probegen.geometry.fits import (
     fit_circle_3d,
     fit_cone,
@@ -44,7 +45,6 @@ from probegen.geometry.fits import (
     fit_sphere,
 )
 from probegen.geometry.frames import FloatArray, unit
-from probegen.sim.dmis_fitting import cylinder_near
 
 Vec3 = tuple[float, float, float]
 Compensation = Literal["feature", "vector"]

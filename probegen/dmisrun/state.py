@@ -18,14 +18,14 @@ import numpy as np
 
 from probegen.constants import MM_PER_INCH
 from probegen.dmis import Call, Expr, Label, Param, Statement, format_param
+from probegen.dmisrun.features import Compensation, DmisFeature
+from probegen.dmisrun.frames import Frame
+from probegen.dmisrun.tolerances import Tolerance, ToleranceResult
 from probegen.errors import ProbegenError
 from probegen.geometry.frames import FloatArray
-from probegen.sim.dmis_features import Compensation, DmisFeature
-from probegen.sim.dmis_frames import Frame
-from probegen.sim.dmis_tolerances import Tolerance, ToleranceResult
 
 if TYPE_CHECKING:
-    from probegen.sim.dmis_vm import Cmm
+    from probegen.dmisrun.interpreter import Cmm
 
 DEFAULT_APPROACH = 5.0
 """SNSET/APPRCH (mm) until the program sets one."""

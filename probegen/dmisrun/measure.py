@@ -1,7 +1,7 @@
 """Statement handlers for definitions: ``F(x)=FEAT/...``, ``T(x)=TOL/...``, ``MEAS``.
 
 A nominal feature is read in the PCS active when it is defined and kept in machine
-coordinates (:class:`~probegen.sim.dmis_features.DmisFeature`).  Forms executed::
+coordinates (:class:`~probegen.dmisrun.features.DmisFeature`).  Forms executed::
 
     F(x)=FEAT/POINT,CART,x,y,z,i,j,k
     F(x)=FEAT/PLANE,CART,x,y,z,i,j,k
@@ -19,10 +19,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 from probegen.dmis import Param, Statement, format_param
-from probegen.sim.dmis_features import KINDS, SIDED, DmisFeature, arr, parse_nominal, vec3
-from probegen.sim.dmis_frames import Frame
-from probegen.sim.dmis_state import MeasBlock, NotExecutable, VmState
-from probegen.sim.dmis_tolerances import parse_tolerance
+from probegen.dmisrun.features import KINDS, SIDED, DmisFeature, arr, parse_nominal, vec3
+from probegen.dmisrun.frames import Frame
+from probegen.dmisrun.state import MeasBlock, NotExecutable, VmState
+from probegen.dmisrun.tolerances import parse_tolerance
 
 _QUALIFIERS = {"LINE": ("BND", "UNBND")} | {kind: ("INNER", "OUTER") for kind in SIDED}
 

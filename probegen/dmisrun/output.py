@@ -12,9 +12,9 @@
 from __future__ import annotations
 
 from probegen.dmis import Statement, format_param
-from probegen.sim.dmis_features import SIDED, DmisFeature, Vec3, arr, vec3
-from probegen.sim.dmis_frames import Frame
-from probegen.sim.dmis_tolerances import ToleranceResult
+from probegen.dmisrun.features import SIDED, DmisFeature, Vec3, arr, vec3
+from probegen.dmisrun.frames import Frame
+from probegen.dmisrun.tolerances import ToleranceResult
 
 LINE_LIMIT = 80
 """Longest physical output line (characters) when items can be wrapped."""

@@ -9,7 +9,7 @@ Conventions (details in the modules named):
 
 * Units: ``UNITS/MM|INCH,ANGDEC|ANGRAD``; everything is millimetres and machine
   coordinates inside, program units and the active PCS in statements and output.
-* Frames: :mod:`probegen.sim.dmis_frames` and :mod:`probegen.sim.dmis_datums`.
+* Frames: :mod:`probegen.dmisrun.frames` and :mod:`probegen.dmisrun.datums`.
 * Stylus: the compensation radius is half the diameter of the selected ``SNSDEF``
   sensor (the last ``SNSDEF/PROBE`` parameter), or ``cmm.ball_radius`` before any
   ``SNSLCT``.  The CMM model's own ``ball_radius`` is never changed: it is the physical
@@ -19,7 +19,7 @@ Conventions (details in the modules named):
   centre's target is ``p + r n``; the CMM moves straight to ``p + (r + APPRCH) n``,
   probes along ``-n`` at most ``APPRCH + SEARCH``, records the ball centre where it
   touched and retracts ``RETRCT`` along ``+n``.  Compensation of the recorded centres:
-  :mod:`probegen.sim.dmis_features` (``compensation="feature"`` or ``"vector"``).
+  :mod:`probegen.dmisrun.features` (``compensation="feature"`` or ``"vector"``).
   ``SNSET/DEPTH`` is accepted and has no effect on ``PTMEAS``.  Before the program
   sets them, APPRCH, RETRCT and SEARCH are 5 mm.
 * Motion: ``GOTO/x,y,z`` (or ``GOTO/INCR,d,i,j,k``) is one straight ``cmm.move``.
@@ -28,8 +28,8 @@ Conventions (details in the modules named):
 * Alarms: a :class:`SimAlarm` from the CMM (unexpected contact) stops the run; so does
   a PTMEAS that touches nothing: alarm :data:`ALARM_NO_CONTACT`.  The result keeps
   the output written until then (without ``ENDFIL``) and the alarm with its line.
-* Tolerances: :mod:`probegen.sim.dmis_tolerances`; output format:
-  :mod:`probegen.sim.dmis_output`.
+* Tolerances: :mod:`probegen.dmisrun.tolerances`; output format:
+  :mod:`probegen.dmisrun.output`.
 * Accepted and ignored: :data:`NO_OPS`.  Anything else the VM cannot execute raises
   ``UnsupportedError`` (with source and line) unless ``skip_unsupported=True``; then
   each such statement is listed in :attr:`DmisRunResult.skipped`, a MEAS block with a
@@ -45,11 +45,9 @@ from typing import Protocol
 
 import numpy as np
 
+from probegen.alarms import SimAlarm
 from probegen.dmis import DmisFile, Label, Statement, Text, parse_dmis
-from probegen.errors import ProbegenError, UnsupportedError
-from probegen.geometry.frames import FloatArray, unit
-from probegen.sim.alarms import SimAlarm
-from probegen.sim.dmis_datums import (
+from probegen.dmisrun.datums import (
     do_const,
     do_datdef,
     do_datset,
@@ -58,7 +56,7 @@ from probegen.sim.dmis_datums import (
     do_save,
     do_trans,
 )
-from probegen.sim.dmis_features import (
+from probegen.dmisrun.features import (
     MINIMUM_POINTS,
     Compensation,
     DmisFeature,
@@ -67,10 +65,12 @@ from probegen.sim.dmis_features import (
     fit_feature,
     vec3,
 )
-from probegen.sim.dmis_measure import do_feat, do_meas, do_tol
-from probegen.sim.dmis_output import echo, feature_text, tolerance_text
-from probegen.sim.dmis_state import DmisProgramError, MeasBlock, NotExecutable, VmState
-from probegen.sim.dmis_tolerances import ToleranceResult, evaluate
+from probegen.dmisrun.measure import do_feat, do_meas, do_tol
+from probegen.dmisrun.output import echo, feature_text, tolerance_text
+from probegen.dmisrun.state import DmisProgramError, MeasBlock, NotExecutable, VmState
+from probegen.dmisrun.tolerances import ToleranceResult, evaluate
+from probegen.errors import ProbegenError, UnsupportedError
+from probegen.geometry.frames import FloatArray, unit
 
 __all__ = [
     "ALARM_NO_CONTACT",
@@ -79,9 +79,13 @@ __all__ = [
     "DmisFeature",
     "DmisProgramError",
     "DmisRunResult",
+    "NotExecutable",
+    "VmState",
     "SimAlarm",
     "SkippedStatement",
     "ToleranceResult",
+    "execute_statement",
+    "record_skipped",
     "run_dmis",
 ]
 
@@ -191,7 +195,7 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
     for statement in parsed.statements:
         state.statement = statement
         try:
-            ended = _execute(state, statement)
+            ended = execute_statement(state, statement)
         except NotExecutable as exc:
             _not_executed(state, statement, str(exc), skip_unsupported, skipped)
         except SimAlarm as exc:
@@ -211,8 +215,13 @@ def _output_text(state: VmState) -> str:
     return "\n".join([header, *state.lines]) + "\n"
 
 
-def _execute(state: VmState, st: Statement) -> bool:
-    """Execute one statement; return True at ENDFIL."""
+def execute_statement(state: VmState, st: Statement) -> bool:
+    """Execute one statement; return True at ENDFIL.
+
+    Raises:
+        NotExecutable: the statement (or a part of it) is not executed.
+        DmisProgramError: the program is wrong.
+    """
     if state.meas is not None and state.meas.skipped_at is not None and st.major != "ENDMES":
         return False
     if st.major == "ENDFIL":
@@ -236,6 +245,12 @@ def _not_executed(state: VmState, st: Statement, reason: str, skip: bool,
     if not skip:
         raise UnsupportedError(f"{state.source}:{st.line}: the virtual CMM cannot execute "
                                f"{st.major}: {reason}\n    {st.text}")
+    record_skipped(state, st, reason, skipped)
+
+
+def record_skipped(state: VmState, st: Statement, reason: str,
+                   skipped: list[SkippedStatement]) -> None:
+    """List ``st`` as skipped; labels it defines and a MEAS block it is in become unusable."""
     skipped.append(SkippedStatement(st.line, st.text, reason))
     if st.label is not None:
         state.skipped_labels[f"{st.label.kind}({st.label.name})"] = st.line

@@ -1,7 +1,7 @@
 """Statement handlers for coordinate systems and constructions.
 
 ``D(x)=DATSET/...``, ``D(x)=TRANS/...`` and ``D(x)=ROTATE/...`` each build a new frame
-from the active one (semantics in :mod:`probegen.sim.dmis_frames`), store it as
+from the active one (semantics in :mod:`probegen.dmisrun.frames`), store it as
 ``D(x)`` and activate it; ``SAVE/DA(x)`` keeps the active frame as ``DA(x)``;
 ``RECALL/D(x)`` or ``RECALL/DA(x)`` activates a stored one.  ``DATDEF/FA(f),DAT(a)``
 makes a measured or constructed feature a datum.
@@ -15,14 +15,13 @@ executed.
 from __future__ import annotations
 
 from probegen.dmis import Expr, Label, Param, Statement, format_param
-from probegen.geometry.frames import FloatArray
-from probegen.sim.dmis_features import (
+from probegen.dmisrun.features import (
     DmisFeature,
     arr,
     intersect_line_plane,
     intersect_planes,
 )
-from probegen.sim.dmis_frames import (
+from probegen.dmisrun.frames import (
     Frame,
     FrameError,
     alignment_angle,
@@ -31,8 +30,9 @@ from probegen.sim.dmis_frames import (
     offset_to_point,
     parse_direction,
 )
-from probegen.sim.dmis_output import echo
-from probegen.sim.dmis_state import NotExecutable, VmState
+from probegen.dmisrun.output import echo
+from probegen.dmisrun.state import NotExecutable, VmState
+from probegen.geometry.frames import FloatArray
 
 _ORIGINS = {"XORIG": 0, "YORIG": 1, "ZORIG": 2}
 _ROTATIONS = {"XAXIS": 0, "YAXIS": 1, "ZAXIS": 2}

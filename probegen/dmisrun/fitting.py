@@ -5,7 +5,7 @@ CMM point patterns are sparse: two rings of four points (the NIST IMTS program) 
 a fit that knows nothing of the nominal can return any of them.  A CMM knows the
 nominal and starts there; :func:`cylinder_near` does the same: Gauss-Newton on the
 orthogonal distances, started from the nominal axis through the points' centroid.
-:func:`probegen.sim.dmis_features.fit_feature` keeps it unless the unseeded
+:func:`probegen.dmisrun.features.fit_feature` keeps it unless the unseeded
 least-squares fit is clearly better.
 """
 

@@ -1,0 +1,135 @@
+"""Evaluate a posted program's DPRNT log: the DMIS program's features and tolerances.
+
+The DMIS program (as posted, from the feature map) runs again through the DMIS
+interpreter, this time against a *replaying* machine: its n-th probing move returns the
+ball centre the log holds for the map's n-th touch (matched by the printed id and
+index, not by log order).  So every measured feature is fitted, compensated, constructed,
+aligned, toleranced and written to a DMIS output file by the same code as on the
+virtual CMM (:mod:`probegen.dmisrun`): features of the DMIS kinds, with the CMM's
+fits (feature compensation, the cylinder fit started from the nominal axis).
+
+Checks: every touch of the map must be in the log (the last one read after a restart),
+in the log's units, and lie on its probing line (:data:`ON_LINE`) within its reach; a
+log that fails is refused with the touch and its DMIS line named.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from probegen.constants import MM_PER_INCH
+from probegen.dmis import parse_dmis
+from probegen.dmisrun.features import DmisFeature, arr, vec3
+from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
+from probegen.errors import ResultsParseError
+from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
+from probegen.results.dprnt import DprntLog, read_dprnt
+
+Vec3 = tuple[float, float, float]
+
+ON_LINE = 0.01
+"""Largest distance (mm) of a logged ball centre from its probing line: the control
+reports the commanded position, on the line up to the printed rounding (and the
+machine's positioning errors, which stay far below this)."""
+
+
+class _Replay:
+    """A ``Cmm`` whose probing moves return the logged ball centres in map order."""
+
+    def __init__(self, fmap: FeatureMap, points: dict[tuple[str, int], Vec3],
+                 source: str) -> None:
+        self.fmap, self.points, self.source = fmap, points, source
+        self.used = 0
+
+    @property
+    def ball_radius(self) -> float:
+        """The posted stylus ball radius, mm."""
+        return self.fmap.ball_diameter / 2.0
+
+    def move(self, start: Vec3, end: Vec3) -> None:
+        """Positioning: nothing to replay."""
+
+    def probe(self, start: Vec3, direction: Vec3, distance: float) -> Vec3:
+        """The logged ball centre of the next touch of the map."""
+        if self.used >= len(self.fmap.touches):
+            raise ResultsParseError(f"{self.source}: the DMIS program probes more points "
+                                    f"than the feature map lists ({len(self.fmap.touches)})")
+        touch = self.fmap.touches[self.used]
+        self.used += 1
+        return self._checked(touch)
+
+    def _checked(self, t: PostTouch) -> Vec3:
+        key = (t.id, t.index)
+        if key not in self.points:
+            raise ResultsParseError(f"{self.source}: no PT {t.id} {t.index} in the log "
+                                    f"(feature {t.feature}, DMIS line {t.line}): did the "
+                                    "program run to its end?")
+        p = arr(self.points[key])
+        rel = p - arr(t.start)
+        along = float(rel @ arr(t.direction))
+        off = float(np.linalg.norm(rel - along * arr(t.direction)))
+        if off > ON_LINE or not -ON_LINE <= along <= t.reach + ON_LINE:
+            raise ResultsParseError(
+                f"{self.source}: PT {t.id} {t.index} (DMIS line {t.line}) at "
+                f"{', '.join(f'{v:.4f}' for v in p)} is {off:.4f} mm off its probing line "
+                f"and {along:.4f} mm along it (reach {t.reach:g}): was the log written by "
+                "this program?")
+        return vec3(p)
+
+
+def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
+    """Run the map's DMIS program on the logged touches (see the module docstring).
+
+    Returns:
+        The DMIS run: output file text, actual and nominal features (work coordinates,
+        mm), evaluated tolerances, the statements skipped.
+
+    Raises:
+        ResultsParseError: a touch missing or off its probing line, or extra probing.
+        DmisProgramError: the map's DMIS program is wrong (a changed map).
+    """
+    scale = MM_PER_INCH if fmap.units == "inch" else 1.0
+    points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
+              for t in log.latest_touches() if t.kind == "PT"}
+    replay = _Replay(fmap, points, log.source)
+    result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
+    if replay.used != len(fmap.touches):
+        raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
+                                f"the feature map lists {len(fmap.touches)}")
+    return result
+
+
+def ingest_file(log: str | Path, features: str | Path) -> DmisRunResult:
+    """Evaluate a captured DPRNT ``log`` with the feature map ``features``.
+
+    Raises:
+        ResultsParseError: the log or the map cannot be used (see ``evaluate_log``).
+    """
+    fmap = read_feature_map(features)
+    parse_dmis(fmap.text, source=fmap.source)  # a damaged map fails here, located
+    return evaluate_log(read_dprnt(log), fmap)
+
+
+def results_table(result: DmisRunResult) -> str:
+    """One line per actual feature (deviation from nominal, form) and per tolerance."""
+    lines = [f"{'feature':<12} {'kind':<7} {'d location':>11} {'d size':>9} {'form':>9}"]
+    for name, actual in result.features.items():
+        lines.append(_feature_line(name, actual, result.nominals[name]))
+    for name, t in result.tolerances.items():
+        verdict = "INTOL" if t.in_tolerance else "OUTOL"
+        lines.append(f"T({name}) {t.tolerance.kind} on {t.feature}: {t.deviation:.4f} "
+                     f"[{t.tolerance.lower:g}, {t.tolerance.upper:g}] {verdict}")
+    for s in result.skipped:
+        lines.append(f"skipped line {s.line}: {s.text} ({s.reason})")
+    return "\n".join(lines) + "\n"
+
+
+def _feature_line(name: str, actual: DmisFeature, nominal: DmisFeature) -> str:
+    loc = sum((a - n) ** 2 for a, n in zip(actual.location, nominal.location,
+                                             strict=True)) ** 0.5
+    size = "" if actual.size is None or nominal.size is None else \
+        f"{actual.size - nominal.size:+.4f}"
+    form = "" if actual.form is None else f"{actual.form:.4f}"
+    return f"{name:<12} {actual.kind:<7} {loc:11.4f} {size:>9} {form:>9}"

@@ -1,0 +1,82 @@
+"""``probegen post`` on files: read the DMIS program, post it, write the program and map.
+
+The part model is placed in the DMIS program's machine coordinates (the machine tool's
+work coordinates) by a translation, ``model_offset`` (mm): the NIST DCX program wants
+its part's origin at (355, 91, -80), the simple part sits at the origin.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from probegen.dialects import get_dialect
+from probegen.dmis import read_dmis
+from probegen.errors import UnsupportedError
+from probegen.machine.profile import MachineProfile
+from probegen.planning.collision import MeshObstacle, load_model
+from probegen.post.featuremap import FeatureMap, dumps, feature_map
+from probegen.post.frontend import PostedProgram, post_dmis
+
+Vec3 = tuple[float, float, float]
+
+MAP_SUFFIX = ".features.json"
+"""The feature map is written next to the program: ``<program stem>.features.json``."""
+
+_NAME = re.compile(r"[^A-Z0-9]")
+
+
+@dataclass(frozen=True, slots=True)
+class PostOutput:
+    """What ``post_file`` produced: the program text, its feature map and the IR result."""
+
+    text: str
+    fmap: FeatureMap
+    posted: PostedProgram
+
+
+def placed_obstacle(model: str | Path, offset: Vec3) -> MeshObstacle:
+    """The STEP model's mesh translated by ``offset`` (mm), as a collision obstacle."""
+    from probegen import cad
+
+    mesh = cad.tessellate(load_model(str(model))).copy()
+    mesh.apply_translation(offset)
+    return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+
+
+def program_name(path: str | Path) -> str:
+    """A program name from a file name: upper case letters and digits, at most 16."""
+    return _NAME.sub("", Path(path).stem.upper())[:16] or "DMIS"
+
+
+def post_file(program: str | Path, machine: MachineProfile, model: str | Path, *,
+              dialect: str, offset: Vec3 = (0.0, 0.0, 0.0), skip_unsupported: bool = False,
+              reroute: bool = False, number: int = 1001) -> PostOutput:
+    """Post DMIS file ``program`` for ``machine`` with the part ``model`` at ``offset``.
+
+    Raises:
+        ProgramParseError: the DMIS file does not parse.
+        UnsupportedError, DmisProgramError, CollisionError: see ``post_dmis``.
+        ModelError: the model cannot be loaded.
+    """
+    target = get_dialect(dialect)
+    if not target.RUNTIME_VARIABLES:
+        raise UnsupportedError(f"post: dialect {dialect!r} is not a machine-tool dialect "
+                               "with a DPRNT-style log; expected fanuc, haas or linuxcnc")
+    parsed = read_dmis(program)
+    posted = post_dmis(parsed, machine, obstacle=placed_obstacle(model, offset),
+                       skip_unsupported=skip_unsupported, reroute=reroute,
+                       number=number, name=program_name(program))
+    text = target.generate(posted.program)
+    data = Path(program).read_bytes()  # read_dmis read it just now
+    return PostOutput(text, feature_map(posted, data, str(program), dialect), posted)
+
+
+def write_post(out: PostOutput, target: Path) -> Path:
+    """Write the program to ``target`` and its feature map next to it; return the map's path."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(out.text.encode("ascii"))
+    map_path = target.with_name(target.stem + MAP_SUFFIX)
+    map_path.write_text(dumps(out.fmap), encoding="utf-8", newline="\n")
+    return map_path
