@@ -89,6 +89,9 @@ class Dialect:
         if isinstance(f, ir.CylinderDef):
             return (f"FEATURE {f.id} CYLINDER {side} D{self.length(f.diameter)} "
                     f"L{self.length(f.length)}")
+        if isinstance(f, ir.TorusDef):
+            return (f"FEATURE {f.id} TORUS {side} D{self.length(f.major_diameter)} "
+                    f"T{self.length(f.minor_diameter)}")
         return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
 
     def var(self, name: str) -> str:

@@ -112,6 +112,11 @@ class Dmis(Dialect):
                       self.num(2.0 * math.degrees(f.half_angle), 6)]
             return "CONE", ",".join(["CONE", side, "CART", *values])
         ijk = [self.num(v, 6) for v in f.axis]
+        if isinstance(f, ir.TorusDef):
+            values = [*self.point(f.centre, node), *ijk, self.length(f.major_diameter),
+                      self.length(f.minor_diameter)]
+            tube = "INNER" if f.concave else "OUTER"
+            return "TORUS", ",".join(["TORUS", tube, "CART", *values])
         values = [*self.point(f.centre, node), *ijk, self.length(f.diameter)]
         if isinstance(f, ir.CylinderDef):
             return "CYLNDR", ",".join(["CYLNDR", side, "CART", *values, self.length(f.length)])

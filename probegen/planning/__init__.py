@@ -14,9 +14,12 @@ from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
-from probegen.planning.order import Stop, Tour, order_stops
-from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
+from probegen.planning.order import Tour, order_stops
+from probegen.planning.reroute import Sweeper
+from probegen.planning.revolved import Comparison
+from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
+from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
 from probegen.spec import RevolvedSpec, Spec
 
 
@@ -29,7 +32,10 @@ class PlannedProgram:
         sphere_tests: the M1 plans, one per sphere-test feature.
         clearance: the collision check's report (smallest clearance per segment).
         revolved: the M2 plans of the revolved features, in measuring order.
-        tour: the order of the revolved features (travel at the clearance plane).
+        tour: the order of the revolved features (travel straight, at a local height
+            or at the clearance plane: :mod:`probegen.planning.travel`).
+        figures: length and time of the revolved features' whole tour, the baseline and
+            the lower bound (:func:`probegen.planning.travel.tour_figures`).
     """
 
     program: ir.Program
@@ -37,6 +43,7 @@ class PlannedProgram:
     clearance: ClearanceReport
     revolved: tuple[RevolvedPlan, ...] = ()
     tour: Tour | None = None
+    figures: Comparison | None = None
 
 
 def make_setup(spec: Spec) -> ir.Setup:
@@ -91,14 +98,17 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
                 body += locate.locate_frame(p, machine, spec.clearance_z)
         if progress is not None:
             progress(1)
-    tour = None
-    if revolved:
-        stops = [Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
-        tour = order_stops(stops, clearance_z=spec.clearance_z)
-        revolved = [revolved[k] for k in tour.order]
-        for r in revolved:
-            body += revolved_nodes(r, machine, spec.clearance_z)
-    program = ir.Program(make_setup(spec), tuple(body))
+    tour = figures = None
     obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
+    if revolved:
+        stops = [stop_of(r) for r in revolved]
+        linker = Linker(Sweeper(obstacle, machine, machine.probe.ball_radius), stops,
+                        spec.clearance_z)
+        tour = order_stops(stops, clearance_z=spec.clearance_z, route=linker.route)
+        revolved = [revolved[k] for k in tour.order]
+        nodes = linked_nodes(revolved, machine, spec.clearance_z, linker)
+        figures = tour_figures(revolved, nodes, machine, spec.clearance_z)
+        body += nodes
+    program = ir.Program(make_setup(spec), tuple(body))
     report = check_program(program, obstacle, plans, machine, progress=progress)
-    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour)
+    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures)
