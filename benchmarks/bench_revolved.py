@@ -6,14 +6,16 @@ Without arguments: every ``/work/shared/ref/nist-step/*.stp`` and the DCX part. 
 model the code path of ``probegen plan MODEL --all-revolved --machine
 samples/machines/vmc-fanuc.toml`` (``all_revolved_spec`` + ``plan_program``), then the
 Fanuc program on the virtual machine (the part at its nominal placement, a perfect probe
-with the profile's ball radius).  Prints per model: features planned, features left out
-(with the reasons), touches, path length and nominal cycle time of ours, of the baseline
-(up to the clearance plane after every touch) and of the lower bound, the ratios, the
-planning time and the virtual machine's alarm (must be none).
+with the profile's ball radius).  Prints per model: features planned, rerouted (a path
+changed by the collision check: touches dropped, lifts, other sections or retract) and
+left out (with the reasons; the notes of those the collision check refused), touches,
+path length and nominal cycle time of ours, of the baseline (up to the clearance plane
+after every touch, travel at the clearance plane) and of the lower bound, the ratios,
+the travel between features, the planning time and the virtual machine's alarm (must
+be none).
 
-Lengths and times are the sums over the features' own paths
-(:func:`probegen.planning.revolved.compare`); the travel between features at the
-clearance plane does not depend on the method and is printed apart (``tour``).
+Lengths and times are those of the whole tour, features and travel, from above the
+first feature to above the last (:func:`probegen.planning.travel.tour_figures`).
 """
 
 from __future__ import annotations
@@ -46,11 +48,29 @@ class Row:
     bound: tuple[float, float] = (0.0, 0.0)
     tour: float = 0.0
     plan_s: float = 0.0
+    plan_cpu: float = 0.0
     vm_s: float = 0.0
     vm_touches: int = 0
     alarm: str | None = None
     error: str | None = None
     notes: tuple[str, ...] = ()
+    rerouted: int = 0
+
+
+def why_unsafe(note: str) -> str:
+    """Why no touch of a feature is safe, from its note: every approach goes up (the
+    surface faces down, out of reach of a vertical probe), the stylus meets only the
+    feature's own faces (the feature is too small or too curved for the ball and shank),
+    or other faces (the neighbours leave no room)."""
+    import re
+
+    own = set(re.search(r"faces ([\d,]+)\)", note).group(1).split(","))  # type: ignore[union-attr]
+    hit = set(re.findall(r"(?:into|of) face (\d+)", note))
+    ups = [float(b) > float(a) for a, b in re.findall(
+        r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)", note)]
+    if ups and all(ups):
+        return "faces down"
+    return "own faces" if hit <= own else "other faces"
 
 
 def reason_of(note: str) -> str:
@@ -59,8 +79,8 @@ def reason_of(note: str) -> str:
         return "axis not vertical"
     if "left out, it collides" in note:
         return "collides"
-    if "a torus" in note:
-        return "torus (no kind)"
+    if "no touch can be reached safely" in note:
+        return "no safe touch: " + why_unsafe(note)
     if "closed above" in note:
         return "closed above"
     if "centre lies in material" in note:
@@ -82,14 +102,13 @@ def run(model: Path) -> Row:
     from probegen.machine.probe_model import ProbeModel
     from probegen.machine.profile import load_profile
     from probegen.planning import plan_program
-    from probegen.planning.revolved import compare
     from probegen.planning.revolved_spec import all_revolved_spec
     from probegen.sim.contact import PlacedPart
     from probegen.sim.vm import VirtualMachine, run_text
 
     row = Row(model.stem)
     machine = load_profile(MACHINE)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         spec, notes = all_revolved_spec(model, machine)
         planned = plan_program(spec, runtime_variables=True)
@@ -100,19 +119,18 @@ def run(model: Path) -> Row:
         row.skipped = sum(row.reasons.values())
         return row
     row.plan_s = time.perf_counter() - t0
+    row.plan_cpu = time.process_time() - c0
     row.notes = notes
     row.planned = len(planned.revolved)
     row.skipped = len(notes)
     row.reasons = Counter(reason_of(n) for n in notes)
-    ours, base, bound = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
-    for p in planned.revolved:
-        c = compare(p.plan, machine)
-        row.touches += len(p.normals)
-        for acc, fig in ((ours, c.plan), (base, c.baseline), (bound, c.lower_bound)):
-            acc[0] += fig.length
-            acc[1] += fig.time
-    row.ours, row.baseline, row.bound = (ours[0], ours[1]), (base[0], base[1]), (
-        bound[0], bound[1])
+    row.touches = sum(len(p.normals) for p in planned.revolved)
+    row.rerouted = sum(1 for p in planned.revolved if p.notes)
+    if planned.figures is not None:
+        f = planned.figures
+        row.ours = (f.plan.length, f.plan.time)
+        row.baseline = (f.baseline.length, f.baseline.time)
+        row.bound = (f.lower_bound.length, f.lower_bound.time)
     row.tour = planned.tour.length if planned.tour is not None else 0.0
     text = get_dialect("fanuc").generate(planned.program)
     t1 = time.perf_counter()
@@ -127,23 +145,30 @@ def run(model: Path) -> Row:
 
 def table(rows: list[Row]) -> str:
     """The summary table (Markdown)."""
-    head = ("| model | planned | left out | touches | ours mm / s | baseline mm / s | "
-            "bound mm / s | time ours/base | time ours/bound | tour mm | plan s | VM |")
-    out = [head, "|" + "---|" * 12]
+    head = ("| model | planned | rerouted | left out | touches | ours mm / s | "
+            "baseline mm / s | bound mm / s | time ours/base | time ours/bound | travel mm | "
+            "plan s (CPU) | VM |")
+    out = [head, "|" + "---|" * 13]
     for r in rows:
         if r.error is not None:
-            out.append(f"| {r.model} | 0 | {r.skipped} | 0 | - | - | - | - | - | - | "
-                       f"{r.plan_s:.1f} | not run: no feature plans |")
+            out.append(f"| {r.model} | 0 | 0 | {r.skipped} | 0 | - | - | - | - | - | - | "
+                       f"{r.plan_s:.1f} | not run: {r.error[:60]} |")
+            continue
+        if not r.planned:
+            vm = "no alarm" if r.alarm is None else f"ALARM {r.alarm}"
+            out.append(f"| {r.model} | 0 | 0 | {r.skipped} | 0 | - | - | - | - | - | - | "
+                       f"{r.plan_s:.1f} ({r.plan_cpu:.1f}) | {vm} (empty program) |")
             continue
         tb = r.ours[1] / r.baseline[1] if r.baseline[1] else float("nan")
         tl = r.ours[1] / r.bound[1] if r.bound[1] else float("nan")
         vm = "no alarm" if r.alarm is None else f"ALARM {r.alarm}"
         if r.alarm is None and r.vm_touches != r.touches:
             vm += f" ({r.vm_touches} of {r.touches} touches)"
-        out.append(f"| {r.model} | {r.planned} | {r.skipped} | {r.touches} | "
+        out.append(f"| {r.model} | {r.planned} | {r.rerouted} | {r.skipped} | {r.touches} | "
                    f"{r.ours[0]:.0f} / {r.ours[1]:.1f} | {r.baseline[0]:.0f} / "
                    f"{r.baseline[1]:.1f} | {r.bound[0]:.0f} / {r.bound[1]:.1f} | "
-                   f"{tb:.3f} | {tl:.3f} | {r.tour:.0f} | {r.plan_s:.1f} | {vm} |")
+                   f"{tb:.3f} | {tl:.3f} | {r.tour:.0f} | {r.plan_s:.1f} ({r.plan_cpu:.1f}) | "
+                   f"{vm} |")
     return "\n".join(out)
 
 
@@ -157,11 +182,13 @@ def main(argv: list[str]) -> int:
         r = run(m)
         rows.append(r)
         reasons = ", ".join(f"{k} {v}" for k, v in sorted((r.reasons or {}).items()))
-        print(f"{r.model}: {r.planned} planned, {r.skipped} left out ({reasons}); "
-              f"plan {r.plan_s:.1f} s, VM {r.vm_s:.1f} s, alarm {r.alarm}", flush=True)
+        print(f"{r.model}: {r.planned} planned ({r.rerouted} rerouted), {r.skipped} left out "
+              f"({reasons}); plan {r.plan_s:.1f} s (CPU {r.plan_cpu:.1f} s), VM {r.vm_s:.1f} s, "
+              f"alarm {r.alarm}", flush=True)
         for n in r.notes:
-            if reason_of(n) == "collides":
-                print(f"  note: {n}")
+            if reason_of(n).startswith(("collides", "no safe touch", "does not plan",
+                                        "not accessible (other)")):
+                print(f"  note: {n[:400]}")
     print()
     print(table(rows))
     bad = [r.model for r in rows if r.alarm is not None]

@@ -128,11 +128,22 @@ def _plan(args: argparse.Namespace) -> int:
         toured = {r.spec.id for r in planned.revolved} | {f.spec.id for f in planned.freeform}
         order = [n.feature.id for n in planned.program.body
                  if isinstance(n, ir.FeatureBlock) and n.feature.id in toured]
-        print(f"order: {' '.join(order)}; travel at z = "
-              f"{spec.clearance_z:.1f}: {planned.tour.length:.1f} mm (nearest neighbour "
+        print(f"order: {' '.join(order)}; travel (straight or "
+              f"at a local height where clear, else at z = {spec.clearance_z:.1f}): "
+              f"{planned.tour.length:.1f} mm (nearest neighbour "
               f"{planned.tour.nearest_length:.1f} mm)")
+    if planned.figures is not None:
+        f = planned.figures
+        print(f"tour with travel: {f.plan.length:.1f} mm {f.plan.time:.1f} s; baseline "
+              f"{f.baseline.length:.1f} mm {f.baseline.time:.1f} s; lower bound "
+              f"{f.lower_bound.length:.1f} mm {f.lower_bound.time:.1f} s")
     print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
           f"clearance above the margin {planned.clearance.minimum:.3f} mm")
+    if args.all_revolved and not planned.revolved:
+        print(f"no revolved feature of {args.input} can be measured safely: the notes say why")
+    for r in planned.revolved:
+        for line in r.notes:
+            print(f"rerouted: {r.spec.id}: {line}")
     for note in notes:
         print(f"note: {note}")
     return ExitCode.OK
@@ -245,10 +256,17 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     if isinstance(part, tuple):
+        if args.form:
+            raise ProbegenError(f"sim --form {args.form}: expected a part model (--part, or "
+                                f"a spec with [part] model), found analytic spheres only")
         placed = PlacedPart.from_spheres(part[0], part[1], rotation=rotation,
                                          translation=args.offset)
     else:
-        placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset)
+        from probegen.sim.form import load_forms
+
+        forms = load_forms(args.form) if args.form else ()
+        placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset,
+                                       forms=forms)
     probe = ProbeModel(ball, Lobing(*args.lobing), noise_sigma=args.noise, seed=args.seed)
     kin = load_machine(args.errors) if args.errors else None
     from probegen.progress import Bar
@@ -452,6 +470,8 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--lobing", type=float, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("LATERAL", "AXIAL", "LOBE"), help="probe pre-travel, mm")
     sm.add_argument("--noise", type=float, default=0.0, help="trigger noise sigma, mm")
+    sm.add_argument("--form", metavar="FILE",
+                    help="planted form errors of revolved faces (TOML, docs/sim.md)")
     sm.add_argument("--seed", type=int, default=0, help="noise seed")
     sm.add_argument("-o", "--output", default="-", help="what the machine sends (default -)")
     sm.add_argument("--pty", metavar="LINK",

@@ -1,52 +1,141 @@
-"""Circles and cylinders (method M2 features) from their touches: position, size, form.
+"""Revolved features (method M2) from their touches: position, size, form, sections.
 
-The fits run on the *ball centres* (the skip positions), which lie exactly on a circle
-or cylinder of radius ``R ∓ r`` about the real axis whatever the real position of the
-part (a vertical probe touching a vertical wall touches square to the axis); the
-diameter is then ``2·(R_fit ± r)`` (+ for a bore, - for a boss).  Compensating each
-touch along its *planned* normal instead would leave a cosine error of about
-``r·θ²/2`` for a part ``θ`` rad off its nominal direction, which biases the diameter.
-The contact points reported are the ball centres moved by ``r`` along the fitted
-normals.
+Every fit runs on the *ball centres* (the skip positions).  The ball centres of a
+vertical probe touching a surface of revolution lie on its offset surface, which is a
+surface of the same kind about the same axis whatever the real position of the part:
 
-* Circle: least-squares circle in 3-D (``fit_circle_3d``) through one section.
-* Cylinder: least-squares cylinder (``fit_cylinder``) through every section.
+* circle, cylinder: radius ``R ∓ r``; sphere: radius ``R ∓ r``;
+* cone: the same axis and half angle ``α``, section radius ``R(h) ∓ r / cos α`` at every
+  height ``h`` (the apex moves along the axis by ``∓ r / sin α``);
+* torus: the same centre circle, tube radius ``ρ ∓ r``;
 
-Characteristics: ``X``, ``Y``, ``Z`` of the centre (a cylinder: the point of the fitted
-axis nearest the nominal centre), ``POS`` (the diameter of the position zone, twice the
-distance of that point from the nominal axis, as in ISO 1101), ``D`` and ``FORM``
-(roundness or cylindricity: the range of the radial residuals).
+(``−`` where the ball is on the axis side of the surface: a bore, a conical hole, a
+spherical cavity; a torus whose air is inside the tube, a fillet).  So the surface's
+size is the fitted size offset back by the ball, exactly; compensating each touch along
+its *planned* normal instead would leave a cosine error of about ``r·θ²/2`` for a part
+``θ`` rad off its nominal direction.  The reported contact points are the ball centres
+moved by ``r`` along the fitted surface normals; residuals are the orthogonal distances
+to the fitted offset surface (``+`` away from the axis; a torus: out of the tube).
+
+Kinds and characteristics (names as in ``results.json``; lengths in mm, angles in
+degrees):
+
+* circle (``fit_circle_3d``, one section): ``X Y Z`` centre, ``POS``, ``D``, ``FORM``
+  (roundness).
+* cylinder (``fit_cylinder``, at least two sections): ``X Y Z`` (the point of the fitted
+  axis nearest the nominal centre), ``POS``, ``D``, ``FORM`` (cylindricity), then per
+  section ``k`` (1 = top) ``D_Sk`` and ``RON_Sk``, then ``TAPER`` (``D`` of the top
+  section − ``D`` of the bottom one, from the least-squares line of the section
+  diameters over their axial positions) and ``TILT`` (angle between the fitted and the
+  nominal axis).
+* cone (``fit_cone``, at least two sections): ``X Y Z`` (the fitted axis in the top
+  gauge plane), ``POS``, ``ANGLE`` (half angle), per section ``D_Sk`` (the fitted
+  cone's diameter in the gauge plane: the plane through the nominal section centre
+  square to the nominal axis) and ``RON_Sk``, ``FORM`` (conicity); the record holds the
+  apex.
+* sphere (``fit_sphere``, touches in at least two sections): ``X Y Z``, ``POS`` (the
+  diameter of a spherical zone about the nominal centre), ``D``, ``FORM``.
+* torus (``fit_torus``, at least three sections: two circles of a torus lie on a
+  one-parameter family of tori): ``X Y Z``, ``POS``, ``D`` (tube diameter), ``DMAJ``
+  (major diameter, not toleranced), ``FORM``.
+
+``POS`` is the diameter of the position zone: twice the distance of the centre from the
+nominal axis, square to it (ISO 1101); a sphere: twice the distance from the nominal
+centre.  Roundness ``RON_Sk`` is least-squares (Gaussian, ISO 12181 LSCI) peak to
+valley: the ball centres of section ``k`` projected on the plane square to the fitted
+axis, a least-squares circle, the range of its radial residuals (equal to the
+surface's: the ball centres lie ``r`` off it along the normal).  Each ``D_Sk`` is
+checked against the ``diameter`` tolerance (every local size within the limits),
+``RON_Sk`` against ``roundness``, ``TAPER`` against ``±taper``, ``ANGLE`` against
+``angle``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
+from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
-from probegen.geometry.fits import fit_circle_3d
-from probegen.geometry.fits_axial import fit_cylinder
+from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
+from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry.frames import rotation_to_z
 
 Vec3 = tuple[float, float, float]
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+MIN_SECTIONS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 3}
+"""Fewest sections (distinct section planes) each kind is evaluated from."""
+
+
+class Limits(Protocol):
+    """The tolerances ``evaluate_revolved`` reads (``spec.RevolvedTolerance``)."""
+
+    @property
+    def diameter(self) -> tuple[float, float] | None: ...
+    @property
+    def position(self) -> float | None: ...
+    @property
+    def form(self) -> float | None: ...
+    @property
+    def roundness(self) -> float | None: ...
+    @property
+    def taper(self) -> float | None: ...
+    @property
+    def angle(self) -> tuple[float, float] | None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Nominal:
+    """The nominal feature, as planned.
+
+    Attributes:
+        kind: ``circle``, ``cylinder``, ``cone``, ``sphere`` or ``torus``.
+        centre: circle, cylinder: a point of the axis (the circle's centre, the
+            cylinder's middle); sphere, torus: the centre; cone: the apex.
+        axis: unit axis (a cone: towards the growing radius).
+        diameter: circle, cylinder, sphere: the diameter; torus: the tube diameter;
+            cone: 0 (its sizes are the section diameters).
+        ball_inside: the ball touches from the axis side of the surface (a bore, a
+            conical hole, a cavity; a torus: from inside the tube).
+        sections: the planned sections (top first): centre on the axis and diameter.
+        half_angle: cone half angle, rad.
+        major_diameter: torus: the diameter of the tube's centre circle.
+    """
+
+    kind: str
+    centre: Vec3
+    axis: Vec3
+    diameter: float
+    ball_inside: bool
+    sections: tuple[tuple[Vec3, float], ...]
+    half_angle: float = 0.0
+    major_diameter: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
 class RevolvedResult:
-    """An evaluated circle or cylinder.
+    """An evaluated revolved feature.
 
     Attributes:
         feature: feature id.
-        kind: ``circle`` or ``cylinder``.
+        kind: ``circle``, ``cylinder``, ``cone``, ``sphere`` or ``torus``.
         centre: fitted centre (see the module doc), mm.
         axis: fitted axis, unit, signed like the nominal one.
-        diameter: fitted diameter of the surface, mm.
-        form: roundness or cylindricity, mm.
+        diameter: fitted diameter (a cone: in the top gauge plane; a torus: the tube), mm.
+        form: roundness, cylindricity, conicity or sphericity, mm.
         points: contact points, mm.
         directions: their fitted outward normals.
-        residuals: radial residuals, mm (+ away from the axis).
+        residuals: residuals, mm (+ away from the axis; a torus: out of the tube).
         characteristics: the checked quantities.
+        half_angle: a cone's fitted half angle, rad, else None.
+        apex: a cone's fitted apex, mm, else None.
+        major_diameter: a torus's fitted major diameter, mm, else None.
     """
 
     feature: str
@@ -59,6 +148,9 @@ class RevolvedResult:
     directions: tuple[Vec3, ...]
     residuals: tuple[float, ...]
     characteristics: tuple[Characteristic, ...]
+    half_angle: float | None = None
+    apex: Vec3 | None = None
+    major_diameter: float | None = None
 
     @property
     def ok(self) -> bool | None:
@@ -67,61 +159,210 @@ class RevolvedResult:
         return all(checks) if checks else None
 
 
-def evaluate_revolved(feature: str, kind: str, ball_centres: ArrayLike, *, inner: bool,
-                      ball_radius: float, nominal_centre: Vec3, nominal_axis: Vec3,
-                      nominal_diameter: float, diameter: tuple[float, float] | None = None,
-                      position: float | None = None,
-                      form: float | None = None) -> RevolvedResult:
-    """Fit and evaluate a circle (one section) or a cylinder (all sections).
+@dataclass(frozen=True, slots=True)
+class _Fit:
+    """A fitted offset surface: its centre (see the module doc), axis, the surface's
+    size, form, residuals and the outward normal at each ball centre."""
+
+    centre: Array
+    axis: Array
+    diameter: float
+    form: float
+    residuals: Array
+    normals: Array
+    extra: tuple[Characteristic, ...] = ()
+    half_angle: float | None = None
+    apex: Vec3 | None = None
+    major_diameter: float | None = None
+
+
+def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
+                      sections: ArrayLike, *, ball_radius: float,
+                      limits: Limits) -> RevolvedResult:
+    """Fit and evaluate one revolved feature from its ball centres.
 
     Args:
         feature: feature id.
-        kind: ``circle`` or ``cylinder``.
+        nominal: the nominal feature.
         ball_centres: (n, 3) skip positions (ball centres), mm.
-        inner: a bore (True) or a boss.
+        sections: (n,) 0-based section of each touch (into ``nominal.sections``).
         ball_radius: the stylus ball radius to offset by, mm.
-        nominal_centre: a point of the nominal axis (the circle's centre), mm.
-        nominal_axis: the nominal axis (unit).
-        nominal_diameter: mm.
-        diameter: lower and upper limit of the diameter's deviation, or None.
-        position: diameter of the position zone, or None.
-        form: limit of the form error, or None.
+        limits: the feature's tolerances.
+
+    Raises:
+        ProbegenError: the touches lie in too few sections for the kind, or the fit
+            failed (too few or degenerate points).
     """
     c = np.asanyarray(ball_centres, dtype=np.float64).reshape(-1, 3)
-    v0 = np.asarray(nominal_axis, dtype=np.float64)
-    grow = ball_radius if inner else -ball_radius
-    if kind == "circle":
-        fit = fit_circle_3d(c)
-        centre, axis, radius = np.asarray(fit.centre), np.asarray(fit.normal), fit.radius
-    else:
-        cyl = fit_cylinder(c)
-        point, axis, radius = np.asarray(cyl.point), np.asarray(cyl.axis), cyl.radius
-        centre = point + float((np.asarray(nominal_centre) - point) @ axis) * axis
-    if float(axis @ v0) < 0.0:
-        axis = -axis
-    rel = c - centre
-    radial = rel - np.outer(rel @ axis, axis)
-    dist = np.linalg.norm(radial, axis=1)
-    outward = radial / dist[:, None]  # away from the axis
-    residuals = dist - radius
-    normals = -outward if inner else outward
-    points = c - ball_radius * normals
-    d = 2.0 * (radius + grow)
-    off = np.asarray(centre) - np.asarray(nominal_centre)
-    pos = 2.0 * float(np.linalg.norm(off - (off @ v0) * v0))
-    f = float(residuals.max() - residuals.min())
-    lo, hi = diameter if diameter is not None else (None, None)
+    k = np.asanyarray(sections, dtype=np.int64).reshape(-1)
+    found = len(set(k.tolist()))
+    if found < MIN_SECTIONS[nominal.kind]:
+        raise ProbegenError(f"feature {feature}: a {nominal.kind} needs touches in at least "
+                            f"{MIN_SECTIONS[nominal.kind]} sections, found {found}")
+    v0 = np.asarray(nominal.axis, dtype=np.float64)
+    sign = 1.0 if nominal.ball_inside else -1.0  # surface size = ball size + sign·r
+    fit = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
+    off = fit.centre - np.asarray(nominal.centre if nominal.kind != "cone" else
+                                  nominal.sections[0][0])
+    across = off if nominal.kind == "sphere" else off - (off @ v0) * v0
+    pos = 2.0 * float(np.linalg.norm(across))
+    out_normals = -sign * fit.normals  # from the surface towards the ball
+    points = c - ball_radius * out_normals
+    nominal_xyz = nominal.sections[0][0] if nominal.kind == "cone" else nominal.centre
     chars = [Characteristic(name, float(m), float(n), float(m - n)) for name, m, n in
-             zip("XYZ", centre, nominal_centre, strict=True)]
-    chars += [
-        Characteristic("POS", pos, 0.0, pos, None, position),
-        Characteristic("D", d, nominal_diameter, d - nominal_diameter, lo, hi),
-        Characteristic("FORM", f, 0.0, f, None, form),
-    ]
+             zip("XYZ", fit.centre, nominal_xyz, strict=True)]
+    chars.append(Characteristic("POS", pos, 0.0, pos, None, limits.position))
+    if nominal.kind != "cone":
+        chars.append(_size("D", fit.diameter, nominal.diameter, limits.diameter))
+    chars.extend(fit.extra)
+    chars.append(Characteristic("FORM", fit.form, 0.0, fit.form, None, limits.form))
+    bad = [ch.name for ch in chars if not math.isfinite(ch.measured)]
+    if bad or not np.all(np.isfinite(points)):
+        raise ProbegenError(f"feature {feature}: expected touches that determine the "
+                            f"{nominal.kind}, found a fit with non-finite "
+                            f"{', '.join(bad) or 'contact points'} (a touch on its axis?)")
     return RevolvedResult(
-        feature=feature, kind=kind, centre=_v(centre), axis=_v(axis), diameter=d, form=f,
-        points=tuple(_v(p) for p in points), directions=tuple(_v(n) for n in normals),
-        residuals=tuple(float(x) for x in residuals), characteristics=tuple(chars))
+        feature=feature, kind=nominal.kind, centre=_v(fit.centre), axis=_v(fit.axis),
+        diameter=fit.diameter, form=fit.form, points=tuple(_v(p) for p in points),
+        directions=tuple(_v(n) for n in out_normals),
+        residuals=tuple(float(x) for x in fit.residuals), characteristics=tuple(chars),
+        half_angle=fit.half_angle, apex=fit.apex, major_diameter=fit.major_diameter)
+
+
+def _size(name: str, measured: float, nominal: float,
+          limits: tuple[float, float] | None) -> Characteristic:
+    """A characteristic with ``[lower, upper]`` limits on its deviation (or none)."""
+    lo, hi = limits if limits is not None else (None, None)
+    return Characteristic(name, measured, nominal, measured - nominal, lo, hi)
+
+
+def _signed(axis: Array, v0: Array) -> Array:
+    return -axis if float(axis @ v0) < 0.0 else axis
+
+
+def _radial(c: Array, centre: Array, axis: Array) -> tuple[Array, Array]:
+    """Distance of each point from the axis line and the unit vector away from it."""
+    rel = c - centre
+    across = rel - np.outer(rel @ axis, axis)
+    dist = np.linalg.norm(across, axis=1)
+    return dist, across / dist[:, None]
+
+
+def _circle(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
+    fit = fit_circle_3d(c)
+    centre = np.asarray(fit.centre)
+    axis = _signed(np.asarray(fit.normal), np.asarray(nominal.axis))
+    dist, outward = _radial(c, centre, axis)
+    res = dist - fit.radius
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
+                outward)
+
+
+def _cylinder(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
+    fit = fit_cylinder(c, axis=nominal.axis)
+    v0 = np.asarray(nominal.axis)
+    axis = _signed(np.asarray(fit.axis), v0)
+    point = np.asarray(fit.point)
+    centre = point + float((np.asarray(nominal.centre) - point) @ axis) * axis
+    dist, outward = _radial(c, centre, axis)
+    res = dist - fit.radius
+    extra, diameters, heights = _sections(nominal, c, k, axis, grow, limits, point=centre)
+    slope = np.polyfit(heights, diameters, 1)[0] if len(heights) > 1 else 0.0
+    taper = float(slope * (heights.max() - heights.min()))
+    t = limits.taper
+    extra += (Characteristic("TAPER", taper, 0.0, taper, None if t is None else -t, t),
+              _size("TILT", _degrees(axis, v0), 0.0, None))
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
+                outward, extra)
+
+
+def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
+              limits: Limits, *, point: Array, slope: float = 0.0,
+              gauge: list[float] | None = None
+              ) -> tuple[tuple[Characteristic, ...], Array, Array]:
+    """Per section ``D_Sk`` and ``RON_Sk`` (LS circle square to ``axis``); also the
+    section diameters and their axial positions.
+
+    A cone (``slope = tan α``, ``point`` on its fitted axis): the touches of a section
+    lie at slightly different heights when the part is off nominal, so each ball centre
+    is first moved along the fitted cone to the section's mean height (its distance
+    from the axis changes by ``slope·Δh``); ``gauge`` replaces the diameters with the
+    fitted surface's in each gauge plane."""
+    frame = rotation_to_z(axis)
+    out: list[Characteristic] = []
+    diameters, heights = [], []
+    for j in sorted(set(k.tolist())):
+        local = (c[k == j] - point) @ frame.T
+        rho = np.hypot(local[:, 0], local[:, 1])
+        scale = (rho - slope * (local[:, 2] - local[:, 2].mean())) / rho
+        circle = fit_circle_2d(local[:, :2] * scale[:, None])
+        d = 2.0 * (circle.radius + grow) if gauge is None else gauge[j]
+        diameters.append(d)
+        heights.append(float(np.mean(local[:, 2])))
+        out.append(_size(f"D_S{j + 1}", d, nominal.sections[j][1], limits.diameter))
+        out.append(Characteristic(f"RON_S{j + 1}", circle.form, 0.0, circle.form, None,
+                                  limits.roundness))
+    return tuple(out), np.asarray(diameters), np.asarray(heights)
+
+
+def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
+    fit = fit_cone(c, axis=nominal.axis)
+    alpha = fit.half_angle
+    axis, point = np.asarray(fit.axis), np.asarray(fit.point)
+    v0 = np.asarray(nominal.axis)
+    shift = grow / math.cos(alpha)  # surface section radius = ball cone's + shift
+
+    def at_gauge(centre: Vec3) -> tuple[Array, float]:
+        t = float((np.asarray(centre) - point) @ v0) / float(axis @ v0)
+        return point + t * axis, 2.0 * (fit.radius + t * math.tan(alpha) + shift)
+
+    gauges = [at_gauge(centre) for centre, _ in nominal.sections]
+    top = gauges[0][0]
+    apex = point - (fit.radius + shift) / math.tan(alpha) * axis
+    extra, _, _ = _sections(nominal, c, k, axis, grow, limits, point=point,
+                            slope=math.tan(alpha), gauge=[g[1] for g in gauges])
+    ang = _size("ANGLE", math.degrees(alpha), math.degrees(nominal.half_angle), limits.angle)
+    rel = c - apex
+    along = rel @ axis
+    across = rel - np.outer(along, axis)
+    e = across / np.linalg.norm(across, axis=1)[:, None]
+    normals = math.cos(alpha) * e - math.sin(alpha) * axis[None, :]
+    res = np.asarray(fit.residuals)
+    return _Fit(top, axis, gauges[0][1], float(res.max() - res.min()), res, normals,
+                (ang, *extra), alpha, _v(apex))
+
+
+def _sphere(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
+    fit = fit_sphere(c)
+    centre = np.asarray(fit.centre)
+    rel = c - centre
+    res = np.asarray(fit.residuals)
+    return _Fit(centre, np.asarray(nominal.axis), 2.0 * (fit.radius + grow),
+                float(res.max() - res.min()), res,
+                rel / np.linalg.norm(rel, axis=1)[:, None])
+
+
+def _torus(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
+    fit = fit_torus(c, axis=nominal.axis)
+    centre = np.asarray(fit.centre)
+    axis = _signed(np.asarray(fit.axis), np.asarray(nominal.axis))
+    _, e = _radial(c, centre, axis)
+    tube = c - (centre + fit.major_radius * e)
+    res = np.asarray(fit.residuals)
+    dmaj = 2.0 * fit.major_radius
+    return _Fit(centre, axis, 2.0 * (fit.minor_radius + grow), float(res.max() - res.min()),
+                res, tube / np.linalg.norm(tube, axis=1)[:, None],
+                (_size("DMAJ", dmaj, nominal.major_diameter, None),),
+                major_diameter=dmaj)
+
+
+_FITS = {"circle": _circle, "cylinder": _cylinder, "cone": _cone, "sphere": _sphere,
+         "torus": _torus}
+
+
+def _degrees(a: Array, b: Array) -> float:
+    """Angle between two unit vectors, degrees (accurate for small angles)."""
+    return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))
 
 
 def _v(a: ArrayLike) -> Vec3:

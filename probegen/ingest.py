@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +33,13 @@ from probegen.evaluate_freeform import (
     complete_guides,
     evaluate_freeform,
 )
-from probegen.evaluate_revolved import RevolvedResult, evaluate_revolved
+from probegen.evaluate_revolved import (
+    MIN_SECTIONS,
+    Nominal,
+    RevolvedResult,
+    evaluate_revolved,
+)
+from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
@@ -42,9 +49,10 @@ Vec3 = tuple[float, float, float]
 
 MIN_POINTS = 5
 """Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
-REVOLVED_MIN_POINTS = {"circle": 4, "cylinder": 6}
-"""Fewest touches a circle (3 determine it; one more checks) or a cylinder is evaluated
-from."""
+REVOLVED_MIN_POINTS = {"circle": 4, "cylinder": 6, "cone": 7, "sphere": 5, "torus": 8}
+"""Fewest touches each revolved kind is evaluated from: one more than its fit's
+parameters (circle 3 in its plane, cylinder 5, cone 6, sphere 4, torus 7), so at least
+one touch checks the form."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,7 +66,7 @@ class Ingested:
         notes: problems found while matching (missing touches, alarms in the log).
         path: the planned stylus path at nominal, as (feature, kind, start, end) segments
             (kind: rapid, protected, or touch ...), for the report.
-        revolved: one evaluated result per circle or cylinder feature with touches.
+        revolved: one evaluated result per revolved feature (method M2) with touches.
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
         freeform: one evaluated result per free-form feature with touches.
@@ -216,35 +224,45 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Freeform
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
               notes: list[str]) -> RevolvedResult | None:
-    """Evaluate a circle or cylinder from its touches (other kinds: a note)."""
+    """Evaluate a revolved feature from its touches (too few, or a failed fit: a note)."""
     from probegen.planning.revolved_spec import plan_revolved
 
-    if feature.kind not in REVOLVED_MIN_POINTS:
-        notes.append(f"feature {feature.id}: kind {feature.kind} is not evaluated yet")
-        return None
     plan = plan_revolved(feature, spec.model, spec.machine, spec.clearance_z)
     indices = sorted(plan.normals)
     found = [k for k in indices if (feature.id, k) in touches]
     missing = sorted(set(indices) - set(found))
     if missing:
         notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
-    least = REVOLVED_MIN_POINTS[feature.kind]
-    sections = {plan.section_of_touch[k] for k in found}
-    if len(found) < least or feature.kind == "cylinder" and len(sections) < 2:
+    least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
+    which = [plan.section_of_touch[k] for k in found]
+    if len(found) < least or len(set(which)) < sections:
         notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches in "
-                     f"{len(sections)} sections (at least {least} needed"
-                     f"{', in 2 sections' if feature.kind == 'cylinder' else ''})")
+                     f"{len(set(which))} sections (at least {least} needed"
+                     f"{f', in {sections} sections' if sections > 1 else ''})")
         return None
-    d = plan.definition
-    centre = getattr(d, "centre", None)
-    axis = getattr(d, "axis", (0.0, 0.0, 1.0))
-    assert centre is not None and hasattr(d, "diameter")
-    tol = feature.tolerance
-    return evaluate_revolved(
-        feature.id, feature.kind, [touches[(feature.id, k)] for k in found], inner=d.inner,
-        ball_radius=spec.machine.probe.ball_radius, nominal_centre=centre,
-        nominal_axis=axis, nominal_diameter=d.diameter, diameter=tol.diameter,
-        position=tol.position, form=tol.form)
+    try:
+        return evaluate_revolved(
+            feature.id, nominal_of(plan), [touches[(feature.id, k)] for k in found], which,
+            ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance)
+    except ProbegenError as exc:
+        notes.append(f"feature {feature.id}: not evaluated: {exc}")
+        return None
+
+
+def nominal_of(plan: Any) -> Nominal:
+    """The nominal feature of a ``planning.revolved_spec.RevolvedPlan`` for
+    ``evaluate_revolved``."""
+    d, kind = plan.definition, plan.spec.kind
+    sections = tuple((vec3(np.asarray(s.centre, dtype=np.float64)), 2.0 * float(s.radius))
+                     for s in plan.resolved.sections)
+    axis = vec3(np.asarray(getattr(d, "axis", plan.resolved.feature.axis), dtype=np.float64))
+    inside = bool(getattr(d, "concave", d.inner))
+    if kind == "cone":
+        return Nominal(kind, d.apex, axis, 0.0, inside, sections, half_angle=d.half_angle)
+    if kind == "torus":
+        return Nominal(kind, d.centre, axis, d.minor_diameter, inside, sections,
+                       major_diameter=d.major_diameter)
+    return Nominal(kind, d.centre, axis, d.diameter, inside, sections)
 
 
 def _ranges(numbers: list[int]) -> str:
@@ -325,6 +343,9 @@ def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
         "axis": [_f(v) for v in r.axis],
         "diameter": _f(r.diameter),
         "form": _f(r.form),
+        **({} if r.half_angle is None else {"half_angle_deg": _f(math.degrees(r.half_angle))}),
+        **({} if r.apex is None else {"apex": [_f(v) for v in r.apex]}),
+        **({} if r.major_diameter is None else {"major_diameter": _f(r.major_diameter)}),
         **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
     }
 

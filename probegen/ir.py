@@ -230,6 +230,7 @@ class LineDef:
     normal: Vec3
     inner: bool = False
 
+
 @dataclass(frozen=True, slots=True)
 class FreeformDef:
     """A free-form face measured point by point (method M3).  DMIS measures each touch
@@ -250,7 +251,37 @@ class FreeformDef:
     inner: bool = False
 
 
-FeatureDef = SphereDef | CircleDef | CylinderDef | ConeDef | PlaneDef | LineDef | FreeformDef
+@dataclass(frozen=True, slots=True)
+class TorusDef:
+    """A nominal torus (DMIS ``FEAT/TORUS``), mm.
+
+    Attributes:
+        centre: the centre of the tube's centre circle, on the axis.
+        axis: unit vector.
+        major_diameter: diameter of the tube's centre circle (``2R``).
+        minor_diameter: diameter of the tube (``2r``).
+        inner: the M2 sense, as for the other kinds: the outward normal of the measured
+            faces leans towards the axis.
+        tube_side: +1 when the faces lie on the outer half of the tube (farther from
+            the axis than the centre circle), -1 on the inner half.
+    """
+
+    id: str
+    centre: Vec3
+    axis: Vec3
+    major_diameter: float
+    minor_diameter: float
+    inner: bool = False
+    tube_side: int = 1
+
+    @property
+    def concave(self) -> bool:
+        """Whether the air lies inside the tube (a fillet; DMIS ``INNER``)."""
+        return self.inner if self.tube_side == 1 else not self.inner
+
+
+FeatureDef = (SphereDef | CircleDef | CylinderDef | ConeDef | TorusDef | PlaneDef | LineDef
+              | FreeformDef)
 
 
 @dataclass(frozen=True, slots=True)

@@ -30,7 +30,7 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
 
     [[feature]]                    # a revolved feature (method M2)
     id = "BORE"
-    kind = "cylinder"              # circle | cylinder | cone | sphere
+    kind = "cylinder"              # circle | cylinder | cone | sphere | torus
     face = 8                       # or at = [x, y, z]: a face of the recognised feature
     sections = [10.0, 40.0]        # depths below the feature's top end (default: recognised)
     points = 8                     # per section
@@ -68,7 +68,7 @@ from probegen.tomlread import Table, load_toml
 
 Vec3 = tuple[float, float, float]
 
-REVOLVED_KINDS = ("circle", "cylinder", "cone", "sphere")
+REVOLVED_KINDS = ("circle", "cylinder", "cone", "sphere", "torus")
 """Revolved feature kinds (method M2), measured in sections of a model's surface."""
 FEATURE_KINDS = ("sphere_test", *REVOLVED_KINDS, *PLANAR_KINDS, "freeform")
 """Feature kinds this version plans (method M1: sphere_test; method M2: the revolved
@@ -157,11 +157,19 @@ class RevolvedTolerance:
             the axis).
         form: limit of the form error (roundness for a circle, cylindricity for a
             cylinder: the range of the radial residuals).
+        roundness: limit of the roundness of each section (cylinder, cone).
+        taper: limit of the taper, ``|D(top) − D(bottom)|`` over the measured
+            sections (cylinder).
+        angle: lowest and highest allowed deviation of a cone's half angle, degrees
+            (never scaled by the spec's units).
     """
 
     diameter: tuple[float, float] | None = None
     position: float | None = None
     form: float | None = None
+    roundness: float | None = None
+    taper: float | None = None
+    angle: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,7 +179,8 @@ class RevolvedSpec:
     Attributes:
         id: feature id.
         where: ``file: feature[i]`` for error messages.
-        kind: ``circle``, ``cylinder``, ``cone`` or ``sphere``.
+        kind: ``circle``, ``cylinder``, ``cone``, ``sphere`` or ``torus`` (``tolerance``:
+            ``diameter`` is the tube diameter of a torus).
         face: a model face id of the feature, or None.
         at: a point near one of its faces, or None.
         sections: depths (mm) of the sections below the feature's top end, measured
@@ -441,10 +450,17 @@ def _revolved_tolerance(t: Table, k: float) -> RevolvedTolerance:
         if lo > hi:
             raise t.fail("diameter", "[lower, upper] deviations with lower <= upper")
         diameter = (lo * k, hi * k)
-    values = {key: t.get_float(key, positive=True) for key in ("position", "form")}
+    angle = None
+    if t.has("angle"):
+        lo, hi = t.get_vec("angle", 2) or (0.0, 0.0)
+        if lo > hi:
+            raise t.fail("angle", "[lower, upper] deviations in degrees with lower <= upper")
+        angle = (lo, hi)
+    values = {key: t.get_float(key, positive=True)
+              for key in ("position", "form", "roundness", "taper")}
     t.done()
-    return RevolvedTolerance(diameter, **{key: None if v is None else v * k
-                                          for key, v in values.items()})
+    return RevolvedTolerance(diameter, angle=angle, **{key: None if v is None else v * k
+                                                       for key, v in values.items()})
 
 
 def _freeform(t: Table, fid: str, k: float) -> FreeformSpec:

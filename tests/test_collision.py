@@ -73,3 +73,25 @@ def test_mesh_and_analytic_sphere_agree() -> None:
         b_mesh, _ = mesh.clearance(np.array(p), stylus)
         b_sph, _ = sphere.clearance(np.array(p), stylus)
         assert b_mesh == pytest.approx(b_sph, abs=0.02)
+
+
+def test_swept_volume_bound_never_exceeds_the_sampled_clearance() -> None:
+    """`MeshObstacle.sweep_bound` (capsule for the ball, slab for the shank) is a lower
+    bound of the clearances along a move: never above the clearance at any point of it
+    (200 random moves around the bore_block part, each sampled at 101 points)."""
+    obstacle = obstacle_for(REPO / "samples/bore_block/bore_block.step", [])
+    assert isinstance(obstacle, MeshObstacle)
+    stylus = Stylus(3.0, 2.25, 50.0)
+    rng = np.random.default_rng(7)
+    low, high = np.array([-10.0, -10.0, -5.0]), np.array([110.0, 110.0, 80.0])
+    for k in range(200):
+        a = low + rng.random(3) * (high - low)
+        b = a + rng.normal(size=3) * 15.0
+        if k % 4 == 0:
+            b[:2] = a[:2]  # vertical moves: the shank sweeps a cylinder
+        bound = obstacle.sweep_bound(a, b, stylus)
+        assert bound is not None
+        sampled = np.array([obstacle.clearance(a + t * (b - a), stylus)
+                            for t in np.linspace(0.0, 1.0, 101)])
+        assert bound[0] <= sampled[:, 0].min() + 1e-4
+        assert bound[1] <= sampled[:, 1].min() + 1e-4

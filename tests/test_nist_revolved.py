@@ -8,6 +8,7 @@ about 3 s, DCX about 11 s with the simulation); `benchmarks/bench_revolved.py` r
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,6 @@ from conftest import REPO, SHARED
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.errors import ProbegenError
 from probegen.machine.probe_model import ProbeModel
 from probegen.machine.profile import load_profile
 from probegen.planning import plan_program
@@ -35,21 +35,27 @@ def _need(path: Path) -> Path:
     return path
 
 
-@pytest.mark.parametrize(("model", "planned", "collides"), [
-    (NIST / "nist_ftc_11_asme1_rb.stp", 2, 0),
+@pytest.mark.parametrize(("model", "planned", "unsafe"), [
+    (NIST / "nist_ftc_11_asme1_rb.stp", 3, 0),
     (NIST / "nist_ctc_03_asme1_rc.stp", 20, 0),
-    (DCX, 11, 10),
+    (DCX, 33, 3),
 ])
 def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
-                                                  collides: int) -> None:
+                                                  unsafe: int) -> None:
+    """Every feature that can be made safe is planned (rerouted where the collision
+    check asks); the ones that cannot are reported with the move and the face (DCX: the
+    three rounded edges under the 122 face, their tube facing away from a vertical
+    probe); the whole program clears and runs on the virtual machine."""
     machine = load_profile(MACHINE)
     spec, notes = all_revolved_spec(_need(model), machine)
     result = plan_program(spec, runtime_variables=True)
     assert len(result.revolved) == planned
     assert result.clearance.minimum >= 0.0
-    left = [n for n in notes if "left out, it collides" in n]
-    assert len(left) == collides
-    assert all("expected a clearance of at least" in n for n in left)
+    assert not [n for n in notes if "left out, it collides" in n]
+    left = [n for n in notes if "no touch can be reached safely" in n]
+    assert len(left) == unsafe
+    assert all(re.search(r"approach from \(.+\) to \(.+\): the stylus (ball|shank) .+ "
+                         r"face \d+", n) for n in left)
     touches = sum(len(p.normals) for p in result.revolved)
     text = get_dialect("fanuc").generate(result.program)
     vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
@@ -59,9 +65,23 @@ def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
     assert res.touches == touches
 
 
-def test_model_without_a_plannable_feature_names_the_reasons() -> None:
-    with pytest.raises(ProbegenError, match="is not parallel to Z"):
-        all_revolved_spec(_need(NIST / "nist_ftc_09_asme1_rd.stp"), load_profile(MACHINE))
+def test_model_without_a_plannable_feature_completes_and_names_the_reasons(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """FTC 9: every axis is horizontal, out of reach of a vertical probe: the spec has
+    no feature, the program is empty, and `plan --all-revolved` exits 0 with the notes."""
+    from probegen.cli import ExitCode, main
+
+    model = _need(NIST / "nist_ftc_09_asme1_rd.stp")
+    spec, notes = all_revolved_spec(model, load_profile(MACHINE))
+    assert spec.features == ()
+    assert notes and all("is not parallel to Z" in n for n in notes)
+    planned = plan_program(spec, runtime_variables=True)
+    assert planned.revolved == () and planned.program.body == ()
+    assert main(["plan", str(model), "--all-revolved", "--machine",
+                 str(MACHINE)]) == ExitCode.OK
+    out = capsys.readouterr().out
+    assert "no revolved feature of" in out and "can be measured safely" in out
+    assert out.count("note: R") == len(notes)
 
 
 def test_retract_from_a_trigger_that_rounds_outside_the_surface() -> None:

@@ -36,18 +36,24 @@ def test_sample_spec_loads(in_repo: Path) -> None:
 def test_plan_dispatches_and_orders(in_repo: Path) -> None:
     planned = plan_program(load_spec("samples/bore_block/bore_block.toml"),
                            runtime_variables=True)
-    assert [p.spec.id for p in planned.revolved] == ["BORE", "BOSS"]
-    assert planned.tour is not None and planned.tour.order == (0, 1)
+    # the boss on top first, then straight across and down into the bore (a clear link
+    # below the clearance plane: no climb to z = 100 between them)
+    assert [p.spec.id for p in planned.revolved] == ["BOSS", "BORE"]
+    assert planned.tour is not None and planned.tour.order == (1, 0)
     blocks = [n for n in planned.program.body if isinstance(n, ir.FeatureBlock)]
-    assert [type(b.feature) for b in blocks] == [ir.CylinderDef, ir.CircleDef]
-    bore = blocks[0].feature
+    assert [type(b.feature) for b in blocks] == [ir.CircleDef, ir.CylinderDef]
+    bore = blocks[1].feature
     assert isinstance(bore, ir.CylinderDef)
     assert (bore.centre, bore.diameter, bore.length, bore.inner) == (
         (50.0, 50.0, 25.0), 50.0, 50.0, True)
+    boss_last = planned.revolved[0].plan.path[-2].position
+    link = [n.target for n in blocks[1].body[:3] if isinstance(n, ir.Move)]
+    assert all(z < 100.0 for _, _, z in link)  # never up to the clearance plane
+    assert max(z for _, _, z in link) <= boss_last[2] + 15.0
     # sections by depth below the top (z = 50): 10 -> z 40, 40 -> z 10, top first
-    zs = [s.section.centre[2] for s in planned.revolved[0].plan.sections]
+    zs = [s.section.centre[2] for s in planned.revolved[1].plan.sections]
     assert zs == pytest.approx([40.0, 10.0])
-    (boss_section,) = planned.revolved[1].plan.sections
+    (boss_section,) = planned.revolved[0].plan.sections
     assert boss_section.section.centre[2] == pytest.approx(60.0)
     touches = [n for n in ir.walk(planned.program.body) if isinstance(n, ir.Touch)]
     assert len(touches) == 22
@@ -119,7 +125,7 @@ def test_cli_plan_spec(in_repo: Path, capsys: pytest.CaptureFixture[str]) -> Non
     assert main(["plan", "samples/bore_block/bore_block.toml"]) == ExitCode.OK
     out = capsys.readouterr().out
     assert "BORE     cylinder inner    2   16" in out
-    assert "order: BORE BOSS" in out
+    assert "order: BOSS BORE" in out
 
 
 def test_cli_plan_all_revolved_needs_machine(in_repo: Path) -> None:

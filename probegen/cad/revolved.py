@@ -365,6 +365,18 @@ class _Queries:
         return sorted(self._rays.WParameter(i) for i in range(1, self._rays.NbPnt() + 1))
 
 
+_QUERIES: dict[int, tuple[Model, _Queries]] = {}
+
+
+def _queries(model: Model) -> _Queries:
+    """The model's :class:`_Queries`, built once per loaded model (the ray caster's
+    load alone takes tens of milliseconds on a large model)."""
+    hit = _QUERIES.get(id(model))
+    if hit is None or hit[0] is not model:
+        hit = _QUERIES[id(model)] = (model, _Queries(model))
+    return hit[1]
+
+
 def _sample_count(radius: float) -> int:
     """How many equally spaced samples a section circle of ``radius`` gets."""
     by_angle = math.ceil(TWO_PI / ARC_STEP_ANGLE)
@@ -500,7 +512,7 @@ def section_at(model: Model, feature: RevolvedFeature, axial: float) -> FeatureS
         raise ModelError(f"{model.path}: revolved feature {feature.id} (faces "
                          f"{_ids(feature.faces)}): expected a section from {low:.4f} to "
                          f"{high:.4f} mm along the axis, found {axial:.4f}")
-    return _section(_Queries(model), feature, axial)
+    return _section(_queries(model), feature, axial)
 
 
 # ---------------------------------------------------------------------- features
@@ -519,7 +531,7 @@ def revolved_features(model: Model) -> tuple[RevolvedFeature, ...]:
     Returns:
         The features, ordered by their lowest face id.
     """
-    queries = _Queries(model)
+    queries = _queries(model)
     surfaces = [_surface(f) for f in model.faces if f.type in REVOLVED_TYPES]
     runs = [(group[0], faces, low, high)
             for group in _surface_groups(surfaces)

@@ -95,6 +95,9 @@ class Dialect:
         if isinstance(f, ir.PlaneDef | ir.LineDef):
             kind = "PLANE" if isinstance(f, ir.PlaneDef) else "LINE"
             return f"FEATURE {f.id} {kind} N{','.join(self.num(v, 3) for v in f.normal)}"
+        if isinstance(f, ir.TorusDef):
+            return (f"FEATURE {f.id} TORUS {side} D{self.length(f.major_diameter)} "
+                    f"T{self.length(f.minor_diameter)}")
         return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
 
     def var(self, name: str) -> str:

@@ -161,6 +161,11 @@ class Dmis(Dialect):
         if isinstance(f, ir.FreeformDef):
             raise self.unsupported(node, "a free-form feature is measured point by point")
         ijk = [self.num(v, 6) for v in f.axis]
+        if isinstance(f, ir.TorusDef):
+            values = [*self.point(f.centre, node), *ijk, self.length(f.major_diameter),
+                      self.length(f.minor_diameter)]
+            tube = "INNER" if f.concave else "OUTER"
+            return "TORUS", ",".join(["TORUS", tube, "CART", *values])
         values = [*self.point(f.centre, node), *ijk, self.length(f.diameter)]
         if isinstance(f, ir.CylinderDef):
             return "CYLNDR", ",".join(["CYLNDR", side, "CART", *values, self.length(f.length)])

@@ -49,7 +49,7 @@ from probegen.geometry.fits_solver import (
     summary,
     vec3,
 )
-from probegen.geometry.frames import rotation_to_z
+from probegen.geometry.frames import rotation_to_z, unit
 
 # ------------------------------------------------------------------------- models
 
@@ -149,10 +149,15 @@ def _start_torus(q: FloatArray, axis: FloatArray) -> tuple[Pose, FloatArray] | N
 Start = Callable[[FloatArray, FloatArray], tuple[Pose, FloatArray] | None]
 
 
-def _solve(model: Model, data: Normalised, start: Start) -> Solution:
-    """Refine from every candidate axis and keep the best solution."""
+def _solve(model: Model, data: Normalised, start: Start,
+           hint: ArrayLike | None = None) -> Solution:
+    """Refine from every candidate axis (and the caller's ``hint``, e.g. the nominal
+    axis) and keep the best solution."""
     q, sample = data.points, subsample(data.points)
-    starts = [start(sample, axis) for axis in candidate_axes(sample, data.directions)]
+    axes = candidate_axes(sample, data.directions)
+    if hint is not None:
+        axes.insert(0, unit(hint, what="axis hint"))
+    starts = [start(sample, axis) for axis in axes]
     usable = [s for s in starts if s is not None]
     return multi_start(model, q, usable, step_tol=step_tolerance(data))
 
@@ -203,11 +208,12 @@ def _axis_point(data: Normalised, pose: Pose) -> tuple[float, FloatArray]:
 
 
 @guarded("cylinder")
-def fit_cylinder(points: ArrayLike) -> CylinderFit:
+def fit_cylinder(points: ArrayLike, axis: ArrayLike | None = None) -> CylinderFit:
     """Least-squares (orthogonal distance) cylinder.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 5``, not all collinear.
+        axis: an approximate axis (the nominal one) to start from as well, or None.
 
     Returns:
         The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
@@ -217,7 +223,7 @@ def fit_cylinder(points: ArrayLike) -> CylinderFit:
         ProbegenError: too few, non-finite or collinear points, or no solution.
     """
     data = _prepare(points, "cylinder", 5)
-    sol = _solve(CYLINDER, data, _start_cylinder)
+    sol = _solve(CYLINDER, data, _start_cylinder, axis)
     _, point = _axis_point(data, sol.pose)
     radius = float(sol.shape[0]) * data.scale
     check_finite("cylinder", point, radius)
@@ -230,11 +236,12 @@ def fit_cylinder(points: ArrayLike) -> CylinderFit:
 
 
 @guarded("cone")
-def fit_cone(points: ArrayLike) -> ConeFit:
+def fit_cone(points: ArrayLike, axis: ArrayLike | None = None) -> ConeFit:
     """Least-squares (orthogonal distance) cone.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 6``, not all collinear.
+        axis: an approximate axis (the nominal one) to start from as well, or None.
 
     Returns:
         The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
@@ -246,7 +253,7 @@ def fit_cone(points: ArrayLike) -> ConeFit:
         solution flattens to a plane).
     """
     data = _prepare(points, "cone", 6)
-    sol = _solve(CONE, data, _start_cone)
+    sol = _solve(CONE, data, _start_cone, axis)
     t, point = _axis_point(data, sol.pose)
     psi, dist = float(sol.shape[0]), float(sol.shape[1]) + t * math.sin(sol.shape[0])
     axis = sol.pose.axis if psi >= 0.0 else -sol.pose.axis
@@ -262,11 +269,12 @@ def fit_cone(points: ArrayLike) -> ConeFit:
 
 
 @guarded("torus")
-def fit_torus(points: ArrayLike) -> TorusFit:
+def fit_torus(points: ArrayLike, axis: ArrayLike | None = None) -> TorusFit:
     """Least-squares (orthogonal distance) torus.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 7``, not all collinear.
+        axis: an approximate axis (the nominal one) to start from as well, or None.
 
     Returns:
         The fit; ``axis`` has its largest-magnitude component positive, residuals are
@@ -276,7 +284,7 @@ def fit_torus(points: ArrayLike) -> TorusFit:
         ProbegenError: too few, non-finite or collinear points, or no solution.
     """
     data = _prepare(points, "torus", 7)
-    sol = _solve(TORUS, data, _start_torus)
+    sol = _solve(TORUS, data, _start_torus, axis)
     centre = data.to_world(sol.pose.origin)
     major, minor = (float(v) * data.scale for v in sol.shape)
     check_finite("torus", centre, major, minor)

@@ -23,8 +23,11 @@ from probegen.planning.collision import ClearanceReport, check_program, obstacle
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.order import Stop, Tour, order_stops
 from probegen.planning.planar import plan_planar, planar_nodes
-from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved, revolved_nodes
+from probegen.planning.reroute import Sweeper
+from probegen.planning.revolved import Comparison
+from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
+from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
 from probegen.spec import FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
 
@@ -38,9 +41,12 @@ class PlannedProgram:
         sphere_tests: the M1 plans, one per sphere-test feature.
         clearance: the collision check's report (smallest clearance per segment).
         revolved: the M2 plans of the revolved features, in measuring order.
-        tour: the order of the revolved and free-form features (travel at the
-            clearance plane).
-        freeform: the M3 plans of the free-form features, in measuring order.
+        tour: the order of the revolved features (travel straight, at a local height
+            or at the clearance plane: :mod:`probegen.planning.travel`).
+        figures: length and time of the revolved features' whole tour, the baseline and
+            the lower bound (:func:`probegen.planning.travel.tour_figures`).
+        freeform: the M3 plans of the free-form features, in measuring order (after the
+            revolved features; travel between them at the clearance plane).
     """
 
     program: ir.Program
@@ -48,6 +54,7 @@ class PlannedProgram:
     clearance: ClearanceReport
     revolved: tuple[RevolvedPlan, ...] = ()
     tour: Tour | None = None
+    figures: Comparison | None = None
     freeform: tuple[FreeformPlan, ...] = ()
 
 
@@ -123,26 +130,42 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
                 body += locate.locate_frame(p, machine, spec.clearance_z)
         if progress is not None:
             progress(1)
-    tour = None
-    if revolved or freeform:
-        stops = ([Stop(r.plan.path[0].position, r.plan.path[-1].position) for r in revolved]
-                 + [Stop(f.entry, f.exit) for f in freeform])
-        tour = order_stops(stops, clearance_z=spec.clearance_z)
-        count = len(revolved)
-        for k in tour.order:
-            if k < count:
-                r = revolved[k]
-                nodes = revolved_check(revolved_nodes(r, machine, spec.clearance_z), r.spec,
-                                       r.definition, machine)
-                body += nodes
-                checked += [(r.spec, n) for n in nodes if isinstance(n, ir.Check)]
-            else:
-                body += freeform[k - count].nodes
-        revolved = [revolved[k] for k in tour.order if k < count]
-        freeform = [freeform[k - count] for k in tour.order if k >= count]
+    tour = figures = None
+    obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
+    if revolved:
+        stops = [stop_of(r) for r in revolved]
+        linker = Linker(Sweeper(obstacle, machine, machine.probe.ball_radius), stops,
+                        spec.clearance_z)
+        tour = order_stops(stops, clearance_z=spec.clearance_z, route=linker.route)
+        revolved = [revolved[k] for k in tour.order]
+        nodes = linked_nodes(revolved, machine, spec.clearance_z, linker)
+        figures = tour_figures(revolved, nodes, machine, spec.clearance_z)
+        body += _with_checks(nodes, {r.spec.id: r for r in revolved}, machine, checked)
+    if freeform:
+        order = order_stops([Stop(f.entry, f.exit) for f in freeform],
+                            clearance_z=spec.clearance_z).order
+        freeform = [freeform[k] for k in order]
+        body += [n for f in freeform for n in f.nodes]
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
-    obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
     report = check_program(program, obstacle, plans, machine, progress=progress)
-    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour,
+    return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,
                           tuple(freeform))
+
+
+def _with_checks(nodes: list[ir.Node], plans: dict[str, RevolvedPlan],
+                 machine: MachineProfile,
+                 checked: list[tuple[RevolvedSpec | PlanarSpec, ir.Check]]) -> list[ir.Node]:
+    """The revolved features' nodes with each feature block's run-time stores and
+    ``Check`` (in-process decisions, :func:`revolved_check`) after it; records the
+    checks in ``checked``."""
+    out: list[ir.Node] = []
+    for node in nodes:
+        plan = plans.get(node.feature.id) if isinstance(node, ir.FeatureBlock) else None
+        if plan is None:
+            out.append(node)
+            continue
+        done = revolved_check((node,), plan.spec, plan.definition, machine)
+        out += done
+        checked += [(plan.spec, n) for n in done if isinstance(n, ir.Check)]
+    return out

@@ -27,6 +27,7 @@ gives the geometry without a model.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -37,6 +38,7 @@ import numpy as np
 
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError
+from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
 
 MIN_STEP = 0.01
@@ -134,6 +136,44 @@ class MeshObstacle:
             out.append(max(float(d), 0.0) - MESH_TOLERANCE)
         return out[0], out[1]
 
+    def _distance(self, shape: Any, transform: Any) -> float:
+        obj = self.fcl.CollisionObject(shape, transform)
+        d = self.fcl.distance(obj, self.part, self.request, self.fcl.DistanceResult())
+        return max(float(d), 0.0) - MESH_TOLERANCE
+
+    def sweep_bound(self, a: np.ndarray, b: np.ndarray,
+                    stylus: Stylus) -> tuple[float, float] | None:
+        """Lower bounds of the ball and shank clearances along ``a → b`` (mm) from the
+        swept volumes in a few queries, or None for a move too short to shape.
+
+        Ball: the capsule of radius ``r`` about the segment (exact).  Shank: its axis
+        sweeps the parallelogram spanned by the move and the shank's extent along Z
+        (a cylinder for a vertical move); the swept shank lies within that surface
+        grown by the shank radius, so its distance less the radius is a lower bound.
+        """
+        fcl = self.fcl
+        move = b - a
+        length = float(np.linalg.norm(move))
+        if length < 1e-6:
+            return None
+        rot = np.asarray(rotation_to_z(move / length)).T  # takes +Z onto the move
+        ball = self._distance(fcl.Capsule(stylus.ball, length),
+                              fcl.Transform(rot, (a + b) / 2.0))
+        up = np.array([0.0, 0.0, 1.0])
+        low, high = stylus.ball, stylus.length
+        if math.hypot(move[0], move[1]) < 1e-9:
+            z0 = min(a[2], b[2]) + low
+            z1 = max(a[2], b[2]) + high
+            centre = np.array([a[0], a[1], (z0 + z1) / 2.0])
+            shank = self._distance(fcl.Cylinder(stylus.shank, z1 - z0), fcl.Transform(centre))
+            return ball, shank
+        corners = [a + low * up, b + low * up, b + high * up, a + high * up]
+        side = np.cross(move, up)
+        side *= SLAB / float(np.linalg.norm(side))
+        slab = np.array([c - side for c in corners] + [c + side for c in corners])
+        shank = self._distance(fcl.Convex(slab, 6, _SLAB_FACES), fcl.Transform())
+        return ball, shank - stylus.shank - SLAB
+
     def inside(self, point: np.ndarray) -> bool:
         """Whether ``point`` lies inside the material (a mesh query, for segment starts)."""
         key = (float(point[0]), float(point[1]), float(point[2]))
@@ -143,17 +183,31 @@ class MeshObstacle:
         return hit
 
     def name_at(self, point: np.ndarray) -> str:
-        _, _, tri = self.mesh.nearest.on_surface(point[None])
+        """The face (or triangle) nearest ``point``, by one BVH distance query."""
+        fcl = self.fcl
+        probe = fcl.CollisionObject(fcl.Sphere(1e-6), fcl.Transform(point))
+        result = fcl.DistanceResult()
+        fcl.distance(self.part, probe, fcl.DistanceRequest(enable_nearest_points=True), result)
+        tri = int(result.b1)
         if self.face_ids is None:
-            return f"triangle {int(tri[0])}"
-        return f"face {int(self.face_ids[int(tri[0])])}"
+            return f"triangle {tri}"
+        return f"face {int(self.face_ids[tri])}"
+
+
+SLAB = 1e-3
+"""Half thickness of the slab that stands for the parallelogram swept by the shank's
+axis (a flat convex is not a shape the distance query takes), mm."""
+_SLAB_FACES = np.array([4, 0, 1, 2, 3, 4, 4, 7, 6, 5, 4, 0, 4, 5, 1, 4, 1, 5, 6, 2,
+                        4, 2, 6, 7, 3, 4, 3, 7, 4, 0])
+"""The six quads of the slab (vertex count, then indices), for ``fcl.Convex``."""
 
 
 _MODELS: dict[tuple[str, int, int], Any] = {}
 _MESHES: dict[tuple[str, int, int], MeshObstacle] = {}
 
 
-def _file_key(path: str) -> tuple[str, int, int]:
+def file_key(path: str) -> tuple[str, int, int]:
+    """A file's identity for caches: absolute path, mtime (ns) and size."""
     st = os.stat(path)
     return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
 
@@ -163,7 +217,7 @@ def load_model(path: str) -> Any:
     a file changed since (mtime or size) is loaded again."""
     from probegen import cad
 
-    key = _file_key(path)
+    key = file_key(path)
     hit = _MODELS.get(key)
     if hit is None:
         hit = _MODELS[key] = cad.load_step(path)
@@ -176,7 +230,7 @@ def obstacle_for(model: Path | None, spheres: Sequence[Any]) -> Obstacle:
     if model is not None:
         from probegen import cad
 
-        key = _file_key(str(model))
+        key = file_key(str(model))
         hit = _MESHES.get(key)
         if hit is None:
             mesh = cad.tessellate(load_model(str(model)))
@@ -288,35 +342,23 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     out: list[SegmentClearance] = []
 
     inside = getattr(obstacle, "inside", None)
-    sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] | None = getattr(
-        obstacle, "sweeps", None)
     outside: set[tuple[float, float, float]] = set()
 
-    def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str) -> None:
+    def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str,
+              touch: bool = False) -> None:
         # a start that ends or starts a segment already cleared is outside: a cleared
         # sweep never meets the surface, so both its ends lie on the same side
         if inside is not None and _t(a) not in outside and inside(a):
             raise CollisionError(f"feature {feature or '-'}: segment {len(out) + 1} ({kind}) "
-                                 f"starts inside the part at {_fmt(a)}")
-        key = (_t(a), _t(b), ea, eb, stylus, clear)
-        hit = sweeps.get(key) if sweeps is not None else None
-        if hit is None:
-            hit = _sweep(obstacle, a, b, ea, eb, stylus, clear)
-            if sweeps is not None:
-                sweeps[key] = hit
-        ball, shank, worst = hit
+                                 f"starts inside the part at {fmt(a)}")
+        ball, shank, worst = swept(obstacle, a, b, ea, eb, stylus, clear, bound=not touch)
         seg = SegmentClearance(len(out) + 1, kind, feature, _t(a), _t(b), ball - clear,
                                shank - clear)
         out.append(seg)
         if min(seg.ball, seg.shank) < 0.0:
-            part = "ball" if seg.ball < seg.shank else "shank"
-            gap = min(seg.ball, seg.shank) + clear
-            how = (f"comes within {gap:.3f} mm of" if gap >= 0.0
-                   else f"cuts {-gap:.3f} mm into")
             raise CollisionError(
                 f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
-                f"{_fmt(a)} to {_fmt(b)}: the stylus {part} {how} {obstacle.name_at(worst)}; "
-                f"expected a clearance of at least {clear:.3f} mm")
+                f"{fmt(a)} to {fmt(b)}: {describe(obstacle, seg.ball, seg.shank, clear, worst)}")
         outside.update((_t(a), _t(b)))
 
     for node in ir.walk(program.body):
@@ -337,7 +379,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             if node.mode is ir.MoveMode.RETRACT:
                 if touch_start is None or not np.allclose(target, touch_start, atol=1e-9):
                     raise PlanningError(f"feature {feature}: a retract must return to the "
-                                        f"start of its touch, found {_fmt(target)}")
+                                        f"start of its touch, found {fmt(target)}")
             elif pos is not None:
                 check(pos, target, pos_extra, extra, node.mode.value)
             pos, pos_extra, touch_start = target, extra, None
@@ -348,10 +390,10 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             start = contact + (r + node.approach) * n
             if pos is None or not np.allclose(pos, start, atol=1e-9):
                 raise PlanningError(f"feature {feature}: touch {node.index} does not start at "
-                                    f"its approach point {_fmt(start)}")
+                                    f"its approach point {fmt(start)}")
             e = w.extra(node.contact)
-            stop = contact + (r + (clear + MIN_STEP + MESH_TOLERANCE + e) / _slant(node)) * n
-            check(start, stop, e, e, f"touch {node.role.value} {node.index}")
+            stop = touch_stop(contact, n, r, clear + e, _slant(node))
+            check(start, stop, e, e, f"touch {node.role.value} {node.index}", touch=True)
             for axis, name in enumerate(node.store):
                 if name is not None:
                     w.values[name] = float((contact + r * n - w.origin())[axis])
@@ -373,8 +415,46 @@ def _slant(touch: ir.Touch) -> float:
     return max(SLANT_FACTOR * float(np.dot(touch.normal, touch.surface)), 0.1)
 
 
+def touch_stop(contact: np.ndarray, normal: np.ndarray, ball: float,
+               required: float, slant: float = 1.0) -> np.ndarray:
+    """Where the check of a touch ends: the ball centre ``required`` (+ one step and the
+    mesh tolerance) short of the nominal contact, along the outward ``normal``; a slanted
+    touch (``slant`` < 1, see :func:`_slant`) stops that distance over ``slant`` short."""
+    return contact + (ball + (required + MIN_STEP + MESH_TOLERANCE) / slant) * normal
+
+
+def swept(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float,
+          stylus: Stylus, required: float, *, first: bool = False,
+          bound: bool = True) -> tuple[float, float, np.ndarray]:
+    """:func:`_sweep`, memoised on the obstacle when it keeps ``sweeps`` (a mesh).
+    ``first``: stop at the first point below ``required`` (enough to refuse a move);
+    ``bound``: try the swept-volume bound first (not for touches: they end at the
+    limit, so it never clears them)."""
+    sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] | None = getattr(
+        obstacle, "sweeps", None)
+    key = (_t(a), _t(b), ea, eb, stylus, required)
+    hit = sweeps.get(key) if sweeps is not None else None
+    if hit is None:
+        hit = _sweep(obstacle, a, b, ea, eb, stylus, required, first=first, bound=bound)
+        if sweeps is not None:
+            sweeps[key] = hit
+    return hit
+
+
+def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
+         worst: np.ndarray) -> str:
+    """What a sweep whose clearances (less ``required``) went negative ran into, e.g.
+    ``the stylus ball cuts 0.015 mm into face 3; expected ...``."""
+    part = "ball" if ball < shank else "shank"
+    gap = min(ball, shank) + required
+    how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
+    return (f"the stylus {part} {how} {obstacle.name_at(worst)}; expected a clearance of "
+            f"at least {required:.3f} mm")
+
+
 def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float,
-           stylus: Stylus, required: float) -> tuple[float, float, np.ndarray]:
+           stylus: Stylus, required: float, *, first: bool = False,
+           bound: bool = True) -> tuple[float, float, np.ndarray]:
     """Smallest ball and shank clearances along ``a → b`` by sphere tracing.
 
     Each clearance is less the uncertainty ``(1-t)·ea + t·eb``.  That function of the arc
@@ -382,6 +462,12 @@ def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: floa
     where it exceeds ``required`` by ``x`` the next ``x / k`` mm stay above ``required``.
     """
     length = float(np.linalg.norm(b - a))
+    bounds = getattr(obstacle, "sweep_bound", None) if bound else None
+    if bounds is not None and ea == eb == 0.0:
+        quick = bounds(a, b, stylus)
+        if quick is not None and min(quick) >= required + MIN_STEP:
+            # the swept volumes clear: no tracing; the slack covers the query's tolerance
+            return quick[0] - MIN_STEP / 2.0, quick[1] - MIN_STEP / 2.0, a
     k = 1.0 + (abs(ea - eb) / length if length else 0.0)
     worst_ball = worst_shank = np.inf
     worst = a
@@ -395,7 +481,7 @@ def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: floa
         if min(ball, shank) < min(worst_ball, worst_shank):
             worst = p
         worst_ball, worst_shank = min(worst_ball, ball), min(worst_shank, shank)
-        if t >= 1.0 or length == 0.0:
+        if t >= 1.0 or length == 0.0 or (first and min(ball, shank) < required):
             break
         if floor is not None and worst_shank <= floor:
             break  # the shank reached the least clearance the obstacle reports: nothing
@@ -410,5 +496,6 @@ def _t(v: np.ndarray) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
-def _fmt(v: np.ndarray) -> str:
+def fmt(v: np.ndarray) -> str:
+    """A point as ``(x, y, z)`` with 3 decimals, mm."""
     return "(" + ", ".join(f"{x:.3f}" for x in v) + ")"

@@ -31,6 +31,9 @@ FloatArray = NDArray[np.float64]
 Vec3 = tuple[float, float, float]
 Direct = Callable[[Vec3, Vec3], bool]
 """``direct(a, b)``: whether the straight move from ``a`` to ``b`` is clear."""
+Route = Callable[[Vec3, Vec3], "tuple[Vec3, ...] | None"]
+"""``route(a, b)``: the points of a clear travel from ``a`` to ``b`` below the clearance
+plane (both ends included), or None."""
 
 IMPROVEMENT = 1e-9
 """A move must shorten the tour by more than this (mm) to be made: float noise must not
@@ -64,27 +67,31 @@ class Tour:
     nearest_length: float
 
 
-def travel_path(a: Vec3, b: Vec3, *, clearance_z: float,
-                direct: Direct | None = None) -> tuple[Vec3, ...]:
+def travel_path(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None = None,
+                route: Route | None = None) -> tuple[Vec3, ...]:
     """The points of the travel from ``a`` to ``b`` (``a`` and ``b`` included).
 
-    Straight when ``direct(a, b)`` holds, else up to ``clearance_z`` (or the higher
-    end), across, and down.
+    The caller's ``route`` when it gives one; straight when ``direct(a, b)`` holds;
+    else up to ``clearance_z`` (or the higher end), across, and down.
     """
+    found = route(a, b) if route is not None else None
+    if found is not None:
+        return found
     if direct is not None and direct(a, b):
         return (a, b)
     z = max(clearance_z, a[2], b[2])
     return (a, (a[0], a[1], z), (b[0], b[1], z), b)
 
 
-def travel_length(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None = None) -> float:
+def travel_length(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None = None,
+                  route: Route | None = None) -> float:
     """Length of :func:`travel_path`, mm."""
-    points = travel_path(a, b, clearance_z=clearance_z, direct=direct)
+    points = travel_path(a, b, clearance_z=clearance_z, direct=direct, route=route)
     return sum(math.dist(p, q) for p, q in zip(points, points[1:], strict=False))
 
 
 def cost_matrix(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | None = None,
-                start: Vec3 | None = None) -> FloatArray:
+                start: Vec3 | None = None, route: Route | None = None) -> FloatArray:
     """Travel costs with a start node.
 
     Returns:
@@ -96,11 +103,12 @@ def cost_matrix(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | N
     costs = np.zeros((n + 1, n + 1))
     for j, b in enumerate(stops, start=1):
         if start is not None:
-            costs[0, j] = travel_length(start, b.entry, clearance_z=clearance_z, direct=direct)
+            costs[0, j] = travel_length(start, b.entry, clearance_z=clearance_z, direct=direct,
+                                        route=route)
         for i, a in enumerate(stops, start=1):
             if i != j:
                 costs[i, j] = travel_length(a.exit, b.entry, clearance_z=clearance_z,
-                                            direct=direct)
+                                            direct=direct, route=route)
     return costs
 
 
@@ -181,13 +189,15 @@ def improve(path: list[int], costs: FloatArray) -> list[int]:
 
 
 def order_stops(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | None = None,
-                start: Vec3 | None = None) -> Tour:
+                start: Vec3 | None = None, route: Route | None = None) -> Tour:
     """Order the stops: nearest neighbour, improved by 2-opt and Or-opt.
 
     Args:
         stops: the features, each with its entry and exit point.
         clearance_z: the clearance plane for travel that is not direct, mm.
         direct: whether a straight move between two points is clear (default: never).
+        route: a clear travel below the clearance plane, when there is one (see
+            :data:`Route`; tried before ``direct``).
         start: where the stylus is before the first stop (default: anywhere).
 
     Returns:
@@ -195,7 +205,8 @@ def order_stops(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | N
     """
     if not stops:
         return Tour((), 0.0, (), 0.0)
-    costs = cost_matrix(stops, clearance_z=clearance_z, direct=direct, start=start)
+    costs = cost_matrix(stops, clearance_z=clearance_z, direct=direct, start=start,
+                        route=route)
     nearest = nearest_neighbour(costs)
     best = improve(list(nearest), costs)
     return Tour(tuple(k - 1 for k in best[1:]), tour_length(best, costs),

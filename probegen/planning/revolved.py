@@ -78,6 +78,7 @@ class PathKind(Enum):
     TRANSITION = "transition"  # on the safe circle, between safe points
     LINK = "link"  # on the next section's safe circle, straight along the axis
     CLEAR = "clear"  # at the clearance level, between arcs or sections
+    LIFT = "lift"  # at a local safe height between two safe points (planning.reroute)
     EXIT = "exit"  # above the last safe point, at the clearance level
 
 

@@ -14,18 +14,27 @@ the collision check adds no position uncertainty.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from probegen import ir
 from probegen.errors import CollisionError, ModelError, PlanningError, ProbegenError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.revolved import FeaturePlan, feature_nodes, plan_feature, section_of
+from probegen.planning.collision import file_key, obstacle_for
+from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
+from probegen.planning.revolved import (
+    FeaturePlan,
+    Section,
+    feature_nodes,
+    plan_feature,
+    section_of,
+)
 from probegen.spec import RevolvedSpec, Spec
 
 TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
-                "sphere": "sphere"}
+                "sphere": "sphere", "torus": "torus"}
 """The recognised surface type each revolved kind measures."""
 
 
@@ -47,6 +56,8 @@ class RevolvedPlan:
     resolved: ResolvedRevolved
     plan: FeaturePlan
     definition: ir.FeatureDef
+    notes: tuple[str, ...] = ()
+    """What the reroute changed (:mod:`probegen.planning.reroute`), one line each."""
 
     @property
     def normals(self) -> dict[int, tuple[float, float, float]]:
@@ -96,10 +107,7 @@ def resolve_revolved(feature: RevolvedSpec, model_path: Path | None) -> Resolved
                             f"{owner.reason}")
     sections: tuple[Any, ...]
     if feature.sections is None:
-        if feature.kind == "circle":
-            sections = (section_at(model, owner, sum(owner.extent) / 2.0),)
-        else:
-            sections = tuple(s for s in owner.sections if s.reachable)
+        sections = _default_sections(model, owner, feature.kind, section_at)
     else:
         sections = tuple(section_at(model, owner, _axial(feature, owner, k, depth))
                          for k, depth in enumerate(feature.sections))
@@ -109,6 +117,31 @@ def resolve_revolved(feature: RevolvedSpec, model_path: Path | None) -> Resolved
                                 f"z = {s.centre[2]:.4f} is not accessible: {s.reason}")
     z_sorted = tuple(sorted(sections, key=lambda s: -s.centre[2]))
     return ResolvedRevolved(feature, owner, z_sorted)
+
+
+DEFAULT_SECTIONS = {"circle": (0.5,), "cone": (0.25, 0.75), "torus": (0.2, 0.5, 0.8)}
+"""Default sections (fractions of the axial extent) of a spec feature without
+``sections``, where the recognised ones do not serve: a circle has one, at the middle;
+a cone two (its angle needs two), a torus three at distinct tube angles (two circles
+of a torus lie on a family of tori).  Cylinders take the recognised sections; a sphere
+the recognised one and a second at 3/4 of its extent (one circle lies on many
+spheres)."""
+SPHERE_SECOND = 0.75
+
+
+def _default_sections(model: Any, owner: Any, kind: str, section_at: Any) -> tuple[Any, ...]:
+    """The reachable default sections of ``owner`` for ``kind`` (see
+    :data:`DEFAULT_SECTIONS`); the recognised ones when none of these is reachable."""
+    low, high = owner.extent
+    recognised = tuple(s for s in owner.sections if s.reachable)
+    if kind == "cylinder":
+        return recognised
+    if kind == "sphere":
+        extra = section_at(model, owner, low + SPHERE_SECOND * (high - low))
+        return recognised + ((extra,) if extra.reachable else ())
+    chosen = tuple(s for s in (section_at(model, owner, low + q * (high - low))
+                               for q in DEFAULT_SECTIONS[kind]) if s.reachable)
+    return chosen or recognised
 
 
 _CACHE: dict[int, tuple[Any, tuple[Any, ...]]] = {}
@@ -153,21 +186,150 @@ def definition(resolved: ResolvedRevolved) -> ir.FeatureDef:
         half = f.half_angle or 0.0
         apex = f.centre_at(-f.radius / math.tan(half))
         return ir.ConeDef(fid, apex, axis, half, f.inner)  # type: ignore[arg-type]
+    if f.type == "torus":
+        return ir.TorusDef(fid, f.origin, axis, 2.0 * f.radius,  # type: ignore[arg-type]
+                           2.0 * (f.minor_radius or 0.0), f.inner, f.tube_side)
     return ir.SphereDef(fid, f.origin, 2.0 * f.radius, f.inner)
+
+
+FALLBACK_RETRACT = 1.0
+"""A retract tried when the profile's approach leaves touches that cannot be made safe
+(a boss beside a wall), mm."""
+LEAST_RETRACT = 1.5
+"""No retract below this many margins is tried (a touch must start clear of the
+surface by more than the margin), a ratio."""
+SMALL_BORE_CORE = 0.25
+"""The safe circle of a bore too small for the usual retract keeps this radius, mm."""
+
+
+def _retracts(feature: RevolvedSpec, machine: MachineProfile,
+              sections: list[Section]) -> tuple[float, ...]:
+    """The retracts to try, largest first: the spec's alone when it gives one, else the
+    probe's approach, :data:`FALLBACK_RETRACT`, and the largest that fits the smallest
+    bore section (its safe circle :data:`SMALL_BORE_CORE` in radius); none above the
+    approach or below :data:`LEAST_RETRACT` margins."""
+    if feature.retract is not None:
+        return (feature.retract,)
+    low, usual = LEAST_RETRACT * machine.margin, machine.probe.approach
+    out = [usual, max(FALLBACK_RETRACT, low)]
+    inner = [s.radius / math.cos(s.tilt) for s in sections if s.inner]
+    if inner:
+        out.append(min(inner) - machine.probe.ball_radius - SMALL_BORE_CORE)
+    return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
+
+
+ALTERNATIVE_SECTIONS = {
+    "circle": ((0.25,), (0.75,)),
+    "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
+    "cone": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
+    "sphere": ((0.5, 0.9), (0.3, 0.7)),
+    "torus": ((0.4, 0.65, 0.9), (0.1, 0.35, 0.6)),
+}
+"""Sections tried (fractions of the axial extent) when the default ones of a spec
+without ``sections`` lose touches to the collision check, in order."""
+
+
+def _candidates(resolved: ResolvedRevolved, model_path: Path | None
+                ) -> Iterator[ResolvedRevolved]:
+    """The resolved feature, then (without spec sections) its alternative sections,
+    each built only when asked for."""
+    yield resolved
+    if resolved.spec.sections is not None:
+        return
+    from probegen.cad.revolved import section_at
+
+    model = _model(model_path, resolved.spec)
+    f = resolved.feature
+    low, high = f.extent
+    for fractions in ALTERNATIVE_SECTIONS[resolved.spec.kind]:
+        sections = [section_at(model, f, low + q * (high - low)) for q in fractions]
+        if all(s.reachable for s in sections):
+            ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
+            yield ResolvedRevolved(resolved.spec, f, ordered)
+
+
+def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z: float,
+               sweeper: Sweeper, errors: list[ProbegenError],
+               retract_only: float | None = None) -> Rerouted | None:
+    """The rerouted plan of one choice of sections with the first retract of
+    :func:`_retracts` (or ``retract_only``) that keeps every touch, else the one that
+    keeps the most (None when none plans; the reasons go to ``errors``)."""
+    feature = resolved.spec
+    sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
+    best: Rerouted | None = None
+    retracts = _retracts(feature, machine, sections) if retract_only is None else (
+        retract_only,)
+    for retract in retracts:
+        try:
+            plan = plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
+                                retract=retract, margin=machine.margin, clear_z=clearance_z)
+            safe = reroute(plan, sweeper)
+        except RerouteError as exc:  # a CollisionError, itself a PlanningError
+            errors.append(RerouteError(f"{feature.where}: {exc}"))
+            continue
+        except PlanningError as exc:
+            errors.append(PlanningError(f"{feature.where}: {exc}"))
+            continue
+        if best is None or len(safe.dropped) < len(best.dropped):
+            best = safe
+        if not safe.dropped:
+            break
+    return best
+
+
+def _touches(plan: FeaturePlan) -> int:
+    return sum(1 for p in plan.path if p.normal is not None)
 
 
 def plan_revolved(feature: RevolvedSpec, model_path: Path | None, machine: MachineProfile,
                   clearance_z: float) -> RevolvedPlan:
-    """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``."""
+    """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``,
+    made safe against the model (:func:`probegen.planning.reroute.reroute`).
+
+    Tried in order until every touch is kept: the sections (the spec's or the default
+    ones) with the retracts of :func:`_retracts`, then (when the spec gives no sections)
+    :data:`ALTERNATIVE_SECTIONS` with the retract that kept the most touches there; else
+    the plan that keeps the most touches.
+
+    Raises:
+        PlanningError: nothing plans (the first reason).
+        CollisionError: no touch can be made safe (names the move and the face).
+    """
+    key = (feature, file_key(str(model_path)) if model_path else None, machine, clearance_z)
+    hit = _PLANS.get(key)
+    if hit is None:
+        hit = _PLANS[key] = _plan_revolved(feature, model_path, machine, clearance_z)
+    return hit
+
+
+_PLANS: dict[tuple[Any, ...], RevolvedPlan] = {}
+"""Plans by (spec feature, model file, machine, clearance level): ``--all-revolved``
+plans each feature to choose the spec, then the program plans the spec."""
+
+
+def _plan_revolved(feature: RevolvedSpec, model_path: Path | None, machine: MachineProfile,
+                   clearance_z: float) -> RevolvedPlan:
     resolved = resolve_revolved(feature, model_path)
-    sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
-    retract = feature.retract if feature.retract is not None else machine.probe.approach
-    try:
-        plan = plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
-                            retract=retract, margin=machine.margin, clear_z=clearance_z)
-    except PlanningError as exc:
-        raise PlanningError(f"{feature.where}: {exc}") from None
-    return RevolvedPlan(feature, resolved, plan, definition(resolved))
+    sweeper = Sweeper(obstacle_for(model_path, []), machine, machine.probe.ball_radius)
+    errors: list[ProbegenError] = []
+    best: tuple[ResolvedRevolved, Rerouted] | None = None
+    for k, candidate in enumerate(_candidates(resolved, model_path)):
+        # other sections only with the retract that served the default ones best
+        only = best[1].plan.sections[0].retract if k and best is not None else None
+        safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
+        if safe is None:
+            continue
+        if best is None or _touches(safe.plan) > _touches(best[1].plan):
+            notes = safe.notes if not k else (
+                "default sections lose touches; measured at z = " + ", ".join(
+                    f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
+            best = (candidate, replace(safe, notes=tuple(notes)))
+        if not safe.dropped:
+            break
+    if best is None:
+        raise errors[0]
+    chosen, safe = best
+    return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 
 def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
@@ -177,8 +339,8 @@ def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
     return (nodes[0], ir.FeatureBlock(p.definition, nodes[1:]))
 
 
-KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere"}
-"""The spec kind that measures each recognised type (tori are not planned yet)."""
+KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere", "torus": "torus"}
+"""The spec kind that measures each recognised type."""
 
 
 def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, *,
@@ -200,7 +362,7 @@ def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, 
         if not f.accessible:
             notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not accessible: {f.reason}")
             continue
-        spec = RevolvedSpec(fid, f"{model_path}: revolved feature {f.id}", KIND_OF_TYPE[f.type],
+        spec = RevolvedSpec(fid, f"{model_path}: revolved feature {f.id}", _kind(f),
                             f.faces[0], None, None, 8, None)
         try:
             planned = plan_revolved(spec, model_path, machine, clearance_z)
@@ -245,23 +407,27 @@ def all_revolved_spec(model_path: Path, machine: MachineProfile) -> tuple[Spec, 
     """The spec of ``probegen plan MODEL --all-revolved``: every accessible cylinder, cone
     and sphere that plans and clears the collision check alone (default sections, 8
     points), the clearance plane at least ``CLEARANCE_ABOVE_MODEL`` above the model;
-    and a note for each feature left out (with the reason or the collision).
-
-    Raises:
-        ProbegenError: no feature is left.
+    and a note for each feature left out (with the reason or the collision).  A model
+    with no such feature gives a spec without features (an empty program) and the
+    notes that say why.
     """
     from probegen.planning.collision import load_model
 
     top = load_model(str(model_path)).bbox_max[2]
     clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
     features, notes = all_revolved(model_path, machine, clearance)
-    if not features:
-        raise ProbegenError(f"{model_path}: expected an accessible revolved feature that "
-                            f"plans, found none; " + "; ".join(notes))
     spec = Spec(source=str(model_path), model=model_path, machine=machine,
                 dialect=machine.dialect, clearance_z=clearance, program_number=1001,
                 program_name="ALL REVOLVED", features=features)
     return spec, notes
+
+
+def _kind(f: Any) -> str:
+    """The spec kind ``--all-revolved`` gives a recognised feature: its type's, but a
+    cylinder with one reachable default section (a short land) is a circle."""
+    if f.type == "cylinder" and sum(s.reachable for s in f.sections) < 2:
+        return "circle"
+    return KIND_OF_TYPE[f.type]
 
 
 def _faces(f: Any) -> str:

@@ -29,6 +29,12 @@ Method (model parts), in the part's own frame:
    and bisection to :data:`ROOT_TOLERANCE`.
 3. No contact in the window: tracing resumes at its end.
 
+Planted form errors (``sim.form``): a perturbed cylinder, cone, sphere or torus face is
+solved with the same exact roots at the radius ``radius + δ`` of the contact's own foot
+point, iterated to a fixed point (the local-radius model of ``docs/sim.md``); its
+distances use the same model.  The move, the touch records, the edge and vertex
+roots and the numeric search's step are in ``contact_parts``.
+
 Frames: ``start``/``end`` and every result are in the work frame (the frame the machine
 model's tool point is given in); the placement maps part coordinates ``p`` to work
 coordinates ``rotation @ p + translation``.
@@ -46,17 +52,24 @@ from numpy.typing import ArrayLike
 
 from probegen.cad import Model
 from probegen.cad.exact import (
-    Boundary,
     ExactFaces,
     FloatArray,
     face_roots,
-    line_pipe_roots,
     nearest_on_surface,
     sphere_roots,
-    torus_roots,
 )
 from probegen.constants import tol
 from probegen.errors import ProbegenError
+from probegen.sim.contact_parts import (
+    START_TOLERANCE,
+    Hit,
+    Line,
+    as_rotation,
+    as_vector,
+    boundary_hit,
+    next_step,
+)
+from probegen.sim.form import BoundForm, FormError
 
 MESH_TOLERANCE = 0.02
 """Chordal deviation of the tracing mesh, mm.  The mesh only finds where to look; the
@@ -72,19 +85,8 @@ WINDOW = 2.0
 ROOT_TOLERANCE = 1e-9
 """Numeric contact search: stop when the exact clearance is within this of zero, or the
 bracket on the move is this short, mm."""
-START_TOLERANCE = 1e-9
-"""A root up to this far (mm) before the start of a window still counts (rounding)."""
 MAX_ITERATIONS = 200
 """Iteration limit of the numeric contact search (a grazing move can need many)."""
-TIE = 1e-12
-"""Touches closer than this along the move (mm) are the same touch (an edge and the
-vertex at its end, two faces meeting at the contact point)."""
-NEWTON_CAP = 100.0
-"""An unbracketed Newton step may be at most this many safe (sphere-tracing) steps."""
-
-_KIND_ORDER = {"face": 0, "edge": 1, "vertex": 2}
-
-
 @dataclass(frozen=True, slots=True, eq=False)
 class ContactHit:
     """The first touch of the ball on the part (work frame, mm).
@@ -107,41 +109,6 @@ class ContactHit:
     face_id: int
     kind: str
 
-
-@dataclass(frozen=True, slots=True, eq=False)
-class _Hit:
-    """A touch in the part frame, at arc length ``s`` along the move; ``foot`` is the
-    touched point when it is not ``centre − r·normal`` (a ball that starts overlapping)."""
-
-    s: float
-    normal: FloatArray
-    face: int
-    kind: str
-    foot: FloatArray | None = None
-
-    def before(self, other: _Hit | None) -> bool:
-        """Whether this touch comes first; within :data:`TIE` a face beats an edge, an
-        edge a vertex, then the lower face id wins."""
-        if other is None or self.s < other.s - TIE:
-            return True
-        if self.s > other.s + TIE:
-            return False
-        return (_KIND_ORDER[self.kind], self.face) < (_KIND_ORDER[other.kind], other.face)
-
-
-class _Line:
-    """The move in the part frame: ``a + s·u`` for ``s`` in ``[0, length]``."""
-
-    def __init__(self, a: FloatArray, b: FloatArray) -> None:
-        self.a = a
-        self.length = float(np.linalg.norm(b - a))
-        self.u = (b - a) / self.length if self.length > 0.0 else np.zeros(3)
-
-    def at(self, s: float) -> FloatArray:
-        """The point at arc length ``s``, (3,) float."""
-        return self.a + s * self.u
-
-
 class PlacedPart:
     """The part as placed on the machine: a model or analytic spheres, placed rigidly.
 
@@ -151,14 +118,15 @@ class PlacedPart:
     def __init__(self, solver: _Solver, rotation: ArrayLike | None,
                  translation: ArrayLike | None) -> None:
         self._solver = solver
-        self.rotation = _rotation(rotation)
-        self.translation = _vector(translation if translation is not None else np.zeros(3),
+        self.rotation = as_rotation(rotation)
+        self.translation = as_vector(translation if translation is not None else np.zeros(3),
                                    "translation")
 
     @classmethod
     def from_model(cls, model: Model, *, rotation: ArrayLike | None = None,
                    translation: ArrayLike | None = None,
-                   mesh_tolerance: float = MESH_TOLERANCE) -> PlacedPart:
+                   mesh_tolerance: float = MESH_TOLERANCE,
+                   forms: tuple[FormError, ...] = ()) -> PlacedPart:
         """Place a loaded model.
 
         Args:
@@ -166,8 +134,9 @@ class PlacedPart:
             rotation: (3, 3) proper rotation, part to work frame; identity if omitted.
             translation: (3,) float, mm: where the part origin sits in the work frame.
             mesh_tolerance: chordal deviation of the tracing mesh, mm.
+            forms: planted form errors of revolved faces (``sim.form``).
         """
-        return cls(_ModelSolver(model, mesh_tolerance), rotation, translation)
+        return cls(_ModelSolver(model, mesh_tolerance, forms), rotation, translation)
 
     @classmethod
     def from_spheres(cls, centres: ArrayLike, radii: ArrayLike, *,
@@ -213,7 +182,7 @@ class PlacedPart:
         """
         if not ball_radius > 0.0:
             raise ProbegenError(f"ball radius: expected a positive number, found {ball_radius}")
-        line = _Line(self.to_part(_vector(start, "start")), self.to_part(_vector(end, "end")))
+        line = Line(self.to_part(as_vector(start, "start")), self.to_part(as_vector(end, "end")))
         overlap = self._solver.overlap(line.a, ball_radius)
         hit = overlap if overlap is not None else (
             self._solver.first_hit(line, ball_radius) if line.length > 0.0 else None)
@@ -233,14 +202,14 @@ class PlacedPart:
             The distance between the ball and the part surface: positive when clear,
             zero when touching, negative (minus the penetration) when overlapping.
         """
-        return self._solver.clearance(self.to_part(_vector(point, "point")), ball_radius)
+        return self._solver.clearance(self.to_part(as_vector(point, "point")), ball_radius)
 
 
 class _Solver(ABC):
     """The part's geometry in its own frame (see the two implementations)."""
 
     @abstractmethod
-    def first_hit(self, line: _Line, r: float) -> _Hit | None:
+    def first_hit(self, line: Line, r: float) -> Hit | None:
         """The first touch along ``line`` of a ball of radius ``r`` that starts clear."""
 
     @abstractmethod
@@ -252,7 +221,7 @@ class _Solver(ABC):
         """Signed clearance of a ball of radius ``r`` at ``c``."""
         return self.nearest(c)[0] - r
 
-    def overlap(self, c: FloatArray, r: float) -> _Hit | None:
+    def overlap(self, c: FloatArray, r: float) -> Hit | None:
         """A touch at ``s = 0`` when the ball at ``c`` overlaps the part."""
         if not self.quick_clear(c, r):
             signed, foot, face = self.nearest(c)
@@ -260,7 +229,7 @@ class _Solver(ABC):
                 n = c - foot
                 size = float(np.linalg.norm(n))
                 normal = n / size * (1.0 if signed >= 0.0 else -1.0) if size > 0.0 else n
-                return _Hit(0.0, normal, face + 1, "face", foot)
+                return Hit(0.0, normal, face + 1, "face", foot)
         return None
 
     def quick_clear(self, c: FloatArray, r: float) -> bool:
@@ -275,12 +244,12 @@ class _SphereSolver(_Solver):
         self.centres = centres
         self.radii = radii
 
-    def first_hit(self, line: _Line, r: float) -> _Hit | None:
-        best: _Hit | None = None
+    def first_hit(self, line: Line, r: float) -> Hit | None:
+        best: Hit | None = None
         for k, (centre, radius) in enumerate(zip(self.centres, self.radii, strict=True)):
             for s, n in sphere_roots(line.a, line.u, centre, radius + r, 1.0):
                 if -START_TOLERANCE <= s <= line.length and (best is None or s < best.s):
-                    best = _Hit(s, n, k + 1, "face")
+                    best = Hit(s, n, k + 1, "face")
                     break
         return best
 
@@ -296,7 +265,8 @@ class _SphereSolver(_Solver):
 class _ModelSolver(_Solver):
     """A loaded model: fcl sphere tracing on its mesh, exact solution on its faces."""
 
-    def __init__(self, model: Model, mesh_tolerance: float) -> None:
+    def __init__(self, model: Model, mesh_tolerance: float,
+                 forms: tuple[FormError, ...] = ()) -> None:
         import fcl
 
         from probegen import cad
@@ -309,7 +279,10 @@ class _ModelSolver(_Solver):
         self.low = np.array([f.bbox_min for f in model.faces])
         self.high = np.array([f.bbox_max for f in model.faces])
         mesh = cad.tessellate(model, mesh_tolerance)
-        self.deviation = MESH_DEVIATION_FACTOR * mesh_tolerance
+        self.forms = {f.face - 1: BoundForm(f, cad.face_by_id(model, f.face)) for f in forms}
+        # a perturbed face lies up to its limit off the mesh: every bound allows for it
+        self.deviation = MESH_DEVIATION_FACTOR * mesh_tolerance + max(
+            (f.limit for f in forms), default=0.0)
         self.face_ids = np.asarray(mesh.metadata["face_ids"])
         bvh = fcl.BVHModel()
         bvh.beginModel(len(mesh.vertices), len(mesh.faces))
@@ -339,7 +312,7 @@ class _ModelSolver(_Solver):
         """Clear by more than the guard on the mesh, hence clear exactly."""
         return self.mesh_clearance(c, r)[0] > GUARD + self.deviation
 
-    def first_hit(self, line: _Line, r: float) -> _Hit | None:
+    def first_hit(self, line: Line, r: float) -> Hit | None:
         s = 0.0
         while s <= line.length:
             clear, face = self.mesh_clearance(line.at(s), r)
@@ -355,7 +328,7 @@ class _ModelSolver(_Solver):
 
     # ---------------------------------------------------------------- exact window
 
-    def candidates(self, line: _Line, s0: float, s1: float, margin: float) -> list[int]:
+    def candidates(self, line: Line, s0: float, s1: float, margin: float) -> list[int]:
         """0-based faces whose bounding box, grown by ``margin``, meets ``a + s·u``."""
         lo, hi = self.low - margin, self.high + margin
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -372,14 +345,14 @@ class _ModelSolver(_Solver):
         ok = (first <= last) & ~outside.any(axis=1)
         return np.flatnonzero(ok).tolist()
 
-    def window_hit(self, line: _Line, s0: float, s1: float, r: float,
-                   hint: int) -> _Hit | None:
+    def window_hit(self, line: Line, s0: float, s1: float, r: float,
+                   hint: int) -> Hit | None:
         """The first touch for ``s`` in ``[s0, s1]`` over every face that can reach it."""
         faces = self.candidates(line, s0, s1, r + self.deviation)
         if hint in faces:  # the face fcl found first: its answer bounds the others
             faces.remove(hint)
             faces.insert(0, hint)
-        best: _Hit | None = None
+        best: Hit | None = None
         for index in faces:
             limit = best.s if best is not None else s1
             hit = self.face_hit(index, line, s0, limit, r)
@@ -387,20 +360,25 @@ class _ModelSolver(_Solver):
                 best = hit
         return best
 
-    def face_hit(self, index: int, line: _Line, s0: float, s1: float,
-                 r: float) -> _Hit | None:
+    def face_hit(self, index: int, line: Line, s0: float, s1: float,
+                 r: float) -> Hit | None:
         """The first touch of face ``index`` (0-based) for ``s`` in ``[s0, s1]``."""
         record = self.model.faces[index]
         kind = self.exact.kind(index)
         boundary = self.exact.boundary(index)
-        best: _Hit | None = None
+        best: Hit | None = None
         if kind is not None:
-            for s, n in face_roots(record, line.a, line.u, r):
+            form = self.forms.get(index)
+            roots = face_roots(record, line.a, line.u, r) if form is None else form.roots(
+                line.a, line.u, r)
+            for s, n in roots:
                 if s0 - START_TOLERANCE <= s <= s1 and self.exact.contains(
                         index, line.at(s) - r * n):
-                    best = _Hit(s, n, index + 1, "face")
+                    if form is not None:
+                        form.check(line.at(s) - r * n)
+                    best = Hit(s, n, index + 1, "face")
                     break
-            edge = _boundary_hit(boundary, line, s0, best.s if best else s1, r, index + 1)
+            edge = boundary_hit(boundary, line, s0, best.s if best else s1, r, index + 1)
             if edge is not None and edge.before(best):
                 best = edge
         if kind is None or boundary.free_edges:
@@ -409,8 +387,8 @@ class _ModelSolver(_Solver):
                 best = numeric
         return best
 
-    def numeric_hit(self, index: int, line: _Line, s0: float, s1: float,
-                    r: float) -> _Hit | None:
+    def numeric_hit(self, index: int, line: Line, s0: float, s1: float,
+                    r: float) -> Hit | None:
         """First root of (exact distance to the trimmed face − r) on ``[s0, s1]``."""
         s, lo, hi = s0, s0, math.inf
         for _ in range(MAX_ITERATIONS):
@@ -419,13 +397,13 @@ class _ModelSolver(_Solver):
             f = d - r
             n = (c - foot) / d if d > 0.0 else -line.u
             if abs(f) <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
-                return _Hit(s, n, index + 1, "face") if s <= s1 + ROOT_TOLERANCE else None
+                return Hit(s, n, index + 1, "face") if s <= s1 + ROOT_TOLERANCE else None
             slope = float(n @ line.u)
             if f > 0.0:
                 lo = s
             else:
                 hi = s
-            s = _next_step(s, f, slope, lo, hi, s1)
+            s = next_step(s, f, slope, lo, hi, s1)
             if s > s1:
                 return None
         raise RuntimeError(f"face {index + 1}: the contact search did not converge")
@@ -442,6 +420,9 @@ class _ModelSolver(_Solver):
             d, p = self.face_distance(index, c)
             if d < best:
                 best, foot, face = d, p, index
+        form = self.forms.get(face)
+        if form is not None:
+            return (-best if form.inside(c, foot) else best), foot, face
         inside = self.exact.inside(c) if best > tol.zero else False
         # a model without a solid (faces or shells only) has no inside: distances stay >= 0
         return (-best if inside else best), foot, face
@@ -449,79 +430,9 @@ class _ModelSolver(_Solver):
     def face_distance(self, index: int, c: FloatArray) -> tuple[float, FloatArray]:
         """Exact distance from ``c`` to face ``index`` and the nearest point."""
         if self.exact.kind(index) is not None:
-            foot = nearest_on_surface(self.model.faces[index], c)
+            form = self.forms.get(index)
+            foot = nearest_on_surface(self.model.faces[index], c) if form is None else (
+                form.nearest(c))
             if foot is not None and self.exact.contains(index, foot):
                 return float(np.linalg.norm(c - foot)), foot
         return self.exact.distance(index, c)
-
-
-def _boundary_hit(boundary: Boundary, line: _Line, s0: float, s1: float, r: float,
-                  face: int) -> _Hit | None:
-    """The first touch on a face's straight and circular edges and its vertices."""
-    best: _Hit | None = None
-
-    def keep(s: float, n: FloatArray, kind: str) -> bool:
-        nonlocal best
-        hit = _Hit(s, n, face, kind)
-        if s0 - START_TOLERANCE <= s <= s1 and hit.before(best):
-            best = hit
-            return True
-        return False
-
-    for edge in boundary.lines:
-        for s, n in line_pipe_roots(line.a, line.u, edge.start, edge.end, r):
-            if keep(s, n, "edge"):
-                break
-    for arc in boundary.circles:
-        if _far(line, s0, s1, arc.centre, arc.radius + r):
-            continue
-        for s, n in torus_roots(line.a, line.u, arc.centre, arc.axis, arc.radius, r, 1.0):
-            foot = line.at(s) - r * n - arc.centre
-            if arc.holds(math.atan2(foot @ arc.ydir, foot @ arc.xdir)) and keep(s, n, "edge"):
-                break
-    for vertex in boundary.vertices:
-        for s, n in sphere_roots(line.a, line.u, vertex, r, 1.0):
-            if keep(s, n, "vertex"):
-                break
-    return best
-
-
-def _far(line: _Line, s0: float, s1: float, centre: FloatArray, reach: float) -> bool:
-    """Whether the stretch ``[s0, s1]`` of the move stays farther than ``reach``."""
-    s = min(max(float((centre - line.a) @ line.u), s0), s1)
-    return float(np.linalg.norm(line.at(s) - centre)) > reach
-
-
-def _next_step(s: float, f: float, slope: float, lo: float, hi: float, end: float) -> float:
-    """Next arc length of the numeric search on ``[.., end]``.
-
-    ``f`` is 1-Lipschitz in ``s``, so without a bracket a step of ``f`` (sphere tracing)
-    never passes a root; a longer Newton step is taken while it stays before ``end``,
-    so a step past ``end`` means no root before ``end``.
-    """
-    newton = s - f / slope if slope < 0.0 else math.inf
-    if hi == math.inf:
-        step = s + max(f, min(newton - s, NEWTON_CAP * f))
-        return step if step <= end else s + f
-    return newton if lo < newton < hi else 0.5 * (lo + hi)
-
-
-def _vector(value: ArrayLike, what: str) -> FloatArray:
-    """``value`` as a finite (3,) float array; ``what`` names it in the error."""
-    v = np.asanyarray(value, dtype=np.float64).reshape(-1)
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise ProbegenError(f"{what}: expected 3 finite numbers, found {v.tolist()}")
-    return v
-
-
-def _rotation(value: ArrayLike | None) -> FloatArray:
-    """A checked proper rotation matrix (3, 3); identity for None."""
-    if value is None:
-        return np.eye(3)
-    m = np.asanyarray(value, dtype=np.float64)
-    ok = m.shape == (3, 3) and np.allclose(m @ m.T, np.eye(3), atol=1e-9)
-    if not ok or np.linalg.det(m) <= 0.0:
-        raise ProbegenError(f"rotation: expected a proper (3, 3) rotation matrix, found "
-                            f"{m.tolist()}")
-    return m
-

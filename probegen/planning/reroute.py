@@ -1,0 +1,291 @@
+"""Make a planned revolved feature safe: reroute around what the collision check finds.
+
+:func:`probegen.planning.revolved.plan_feature` builds the M2 path from the geometry of
+the feature alone.  Here every move of that path is swept against the whole part
+(:class:`Sweeper`: ball and shank, the program check's
+required clearance) and the path is rebuilt from what clears:
+
+1. *Stations*: each touch with its safe point.  A touch whose approach does not clear
+   is dropped (only that touch).
+2. *Legs*: between consecutive kept stations the planned moves (safe-circle
+   transitions, axial links, and the safe points of dropped touches passed through);
+   when they do not clear, a lift to a local height (``LIFT_HEIGHTS`` above the higher
+   end) or to the clearance level; when nothing clears, the stations fall into
+   separate *runs*.
+3. *Access*: a station can be entered or left straight along Z from the clearance
+   level when that move clears.  A run is entered at its first station with access,
+   goes back to its start, along to its end and back to its last station with access
+   (out-and-back only where the ends lack access); a run with no access at all is
+   dropped.  Runs are joined at the clearance level.
+
+The result keeps every touch that can be made safe; :class:`RerouteError` (a
+``CollisionError``) names the feature, the move and the obstacle face when none can.
+Paths that cleared unchanged come back unchanged (byte-identical programs).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from probegen.errors import CollisionError
+from probegen.machine.profile import MachineProfile
+from probegen.planning.collision import Obstacle, Stylus, describe, fmt, swept, touch_stop
+from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint
+
+LIFT_HEIGHTS = (5.0, 15.0)
+"""Local lift heights tried between two stations, mm above the higher of the two,
+before the clearance level."""
+
+
+class Sweeper:
+    """Clears single moves of a path being planned, before the program exists.
+
+    Every answer is the check ``check_program`` makes of the same move (the same
+    required clearance, half the machine's margin, and the same memo of sweeps), so a
+    path built only of moves cleared here passes the program's check; a path is taken
+    as outside the part because it is joined to the clearance plane by cleared moves.
+    """
+
+    def __init__(self, obstacle: Obstacle, machine: MachineProfile, ball: float) -> None:
+        probe = machine.probe
+        self.obstacle = obstacle
+        self.stylus = Stylus(ball, probe.shank_diameter / 2.0, probe.length)
+        self.required = machine.margin / 2.0
+
+    def move(self, a: ArrayLike, b: ArrayLike, *, touch: bool = False) -> str | None:
+        """None when the straight move ``a → b`` (mm) clears, else what it runs into
+        (``touch``: the move is a touch, see :func:`swept`)."""
+        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        ball, shank, worst = swept(self.obstacle, pa, pb, 0.0, 0.0, self.stylus,
+                                   self.required, first=True, bound=not touch)
+        if min(ball, shank) - self.required >= 0.0:
+            return None
+        q = self.required
+        what = describe(self.obstacle, ball - q, shank - q, q, worst)
+        return f"from {fmt(pa)} to {fmt(pb)}: {what}"
+
+    def path(self, points: Sequence[ArrayLike]) -> str | None:
+        """None when every move of the polyline clears, else the first collision."""
+        for a, b in zip(points[:-1], points[1:], strict=True):
+            why = self.move(a, b)
+            if why is not None:
+                return why
+        return None
+
+    def touch(self, contact: ArrayLike, normal: ArrayLike,
+              approach: float) -> str | None:
+        """None when a touch from ``approach`` mm off the contact clears (as checked in
+        the program: up to the stop short of the contact), else what it runs into."""
+        c, n = np.asarray(contact, dtype=np.float64), np.asarray(normal, dtype=np.float64)
+        r = self.stylus.ball
+        return self.move(c + (r + approach) * n, touch_stop(c, n, r, self.required),
+                         touch=True)
+
+
+class RerouteError(CollisionError):
+    """No touch of a feature can be reached by moves that clear the part."""
+
+
+@dataclass(frozen=True, slots=True)
+class Station:
+    """One touch of the plan: its safe point and its target (the ball at contact)."""
+
+    safe: PathPoint
+    target: PathPoint
+
+
+@dataclass(frozen=True, slots=True)
+class Rerouted:
+    """A feature plan after the reroute, with what was changed.
+
+    Attributes:
+        plan: the safe plan (touches renumbered from 1 in measuring order).
+        dropped: touch indices of the input plan that were left out.
+        notes: one line per change (dropped touches, lifts, split runs), with the
+            collision that forced it.
+    """
+
+    plan: FeaturePlan
+    dropped: tuple[int, ...]
+    notes: tuple[str, ...]
+
+
+def _stations(plan: FeaturePlan) -> tuple[list[Station], list[list[PathPoint]]]:
+    """The plan's stations in order and the points between consecutive ones."""
+    stations: list[Station] = []
+    legs: list[list[PathPoint]] = []
+    between: list[PathPoint] = []
+    path = plan.path
+    k = 1
+    while k < len(path) - 1:
+        p = path[k]
+        if p.kind is PathKind.SAFE and path[k + 1].kind is PathKind.TARGET:
+            if stations:
+                legs.append(between)
+            stations.append(Station(p, path[k + 1]))
+            between = []
+            k += 3
+            continue
+        between.append(p)
+        k += 1
+    return stations, legs
+
+
+def _pass(p: PathPoint) -> PathPoint:
+    """A safe point passed through without touching."""
+    return replace(p, kind=PathKind.TRANSITION, index=0)
+
+
+def _at(p: PathPoint, z: float, kind: PathKind) -> PathPoint:
+    return PathPoint(kind, (p.position[0], p.position[1], z))
+
+
+class _Router:
+    """Clears stations, legs and accesses of one plan (memoised per plan)."""
+
+    def __init__(self, plan: FeaturePlan, sweeper: Sweeper) -> None:
+        self.plan, self.sweeper = plan, sweeper
+        self.stations, self.legs = _stations(plan)
+        self.notes: list[str] = []
+        self._access: dict[int, str | None] = {}
+
+    def _positions(self, points: Sequence[PathPoint]) -> list[tuple[float, float, float]]:
+        return [p.position for p in points]
+
+    def touch_ok(self, k: int) -> str | None:
+        s = self.stations[k]
+        section = self.plan.sections[s.safe.section]
+        assert s.target.contact is not None and s.target.normal is not None
+        return self.sweeper.touch(s.target.contact, s.target.normal, section.retract)
+
+    def access(self, k: int) -> str | None:
+        """None when station ``k`` is reached straight down from the clearance level."""
+        if k not in self._access:
+            safe = self.stations[k].safe
+            high = _at(safe, self.plan.clear_z, PathKind.CLEAR)
+            self._access[k] = self.sweeper.move(high.position, safe.position)
+        return self._access[k]
+
+    def leg(self, a: int, b: int) -> tuple[list[PathPoint] | None, str]:
+        """The points strictly between stations ``a < b`` that clear, or None and why."""
+        planned: list[PathPoint] = []
+        for k in range(a, b):
+            if k > a:
+                planned.append(_pass(self.stations[k].safe))
+            planned += self.legs[k]
+        sa, sb = self.stations[a].safe, self.stations[b].safe
+        why = self.sweeper.path(self._positions([sa, *planned, sb]))
+        if why is None:
+            return planned, ""
+        top = max(sa.position[2], sb.position[2])
+        heights = [top + h for h in LIFT_HEIGHTS if top + h < self.plan.clear_z]
+        for z in [*heights, self.plan.clear_z]:
+            kind = PathKind.CLEAR if z == self.plan.clear_z else PathKind.LIFT
+            lift = [_at(sa, z, kind), _at(sb, z, kind)]
+            if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
+                if z != self.plan.clear_z:
+                    self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
+                                      f"z = {z:.3f}, the planned move {why}")
+                return lift, ""
+        return None, why
+
+
+def _runs(router: _Router, kept: list[int]) -> list[list[tuple[int, list[PathPoint]]]]:
+    """Kept stations split where no leg clears: per run ``(station, leg to it)``."""
+    runs: list[list[tuple[int, list[PathPoint]]]] = []
+    for k in kept:
+        if runs:
+            leg, why = router.leg(runs[-1][-1][0], k)
+            if leg is not None:
+                runs[-1].append((k, leg))
+                continue
+            router.notes.append(f"touches {router.stations[runs[-1][-1][0]].safe.index} and "
+                                f"{router.stations[k].safe.index}: no clear move between "
+                                f"them ({why}); left by the clearance level")
+        runs.append([(k, [])])
+    return runs
+
+
+def _walk(router: _Router, run: list[tuple[int, list[PathPoint]]],
+          entry: int, exit_: int) -> list[PathPoint]:
+    """Points of one run from station ``entry`` (position in the run) back to its start,
+    along to its end and back to ``exit_``; each station touched on its first visit."""
+    stations = router.stations
+    out: list[PathPoint] = []
+    seen: set[int] = set()
+
+    def visit(j: int) -> None:
+        k = run[j][0]
+        if k in seen:
+            out.append(_pass(stations[k].safe))
+        else:
+            seen.add(k)
+            out.extend((stations[k].safe, stations[k].target, stations[k].safe))
+
+    visit(entry)
+    for j in range(entry - 1, -1, -1):
+        out += reversed(run[j + 1][1])
+        visit(j)
+    for j in range(1, len(run)):
+        out += run[j][1]
+        visit(j)
+    for j in range(len(run) - 1, exit_, -1):
+        out += reversed(run[j][1])
+        visit(j - 1)
+    return out
+
+
+def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
+    """The safe version of ``plan`` (see the module docstring).
+
+    Raises:
+        RerouteError: no touch of the feature can be made safe (names the first move
+            that refused each touch).
+    """
+    router = _Router(plan, sweeper)
+    stations = router.stations
+    kept: list[int] = []
+    dropped: list[int] = []
+    for k in range(len(stations)):
+        why = router.touch_ok(k)
+        if why is None:
+            kept.append(k)
+        else:
+            dropped.append(k)
+            router.notes.append(f"touch {stations[k].safe.index} dropped: its approach {why}")
+    pieces: list[list[PathPoint]] = []
+    for run in _runs(router, kept):
+        open_ = [j for j, (k, _) in enumerate(run) if router.access(k) is None]
+        if not open_:
+            first = stations[run[0][0]].safe.index
+            last = stations[run[-1][0]].safe.index
+            router.notes.append(f"touches {first}-{last} dropped: no clear way down from the "
+                                f"clearance level (the descent {router.access(run[0][0])})")
+            dropped += [k for k, _ in run]
+            continue
+        pieces.append(_walk(router, run, open_[0], open_[-1]))
+    if not pieces:
+        raise RerouteError(f"feature {plan.feature}: no touch can be reached safely: "
+                           + "; ".join(router.notes))
+    safe = _assemble(plan, pieces)
+    return Rerouted(plan if safe.path == plan.path else safe, tuple(sorted(
+        stations[k].safe.index for k in dropped)), tuple(router.notes))
+
+
+def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]]) -> FeaturePlan:
+    """Entry, the runs joined at the clearance level, exit; touches renumbered."""
+    z = plan.clear_z
+    path: list[PathPoint] = [_at(pieces[0][0], z, PathKind.ENTRY)]
+    for j, piece in enumerate(pieces):
+        if j:
+            path += [_at(path[-1], z, PathKind.CLEAR), _at(piece[0], z, PathKind.CLEAR)]
+        path += piece
+    path.append(_at(path[-1], z, PathKind.EXIT))
+    order = [p.index for p in path if p.kind is PathKind.TARGET]
+    new = {old: k for k, old in enumerate(order, start=1)}
+    numbered = tuple(replace(p, index=new[p.index]) if p.index else p for p in path)
+    return replace(plan, path=numbered)

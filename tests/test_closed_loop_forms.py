@@ -1,0 +1,260 @@
+"""Closed loop with planted form errors: program → virtual machine with a perturbed part
+(``sim.form``) → log → ingest, against the planted truth.
+
+Parts: ``samples/bore_block`` (the 50 mm bore gets a size error, a taper and a 3-lobe
+roundness error; the 20 mm boss a size error) and ``samples/revolved_block`` (a cone
+with a size error and 3 lobes, a dome with a size error and 4 lobes, a rounded bore
+edge, a torus, with a thinner tube), each placed 0.3 / -0.2 mm off.
+
+Truth: the planted ``δ`` at the points the virtual machine really touched (its contact
+records), fitted by *linear* least squares to the first-order model of each fit
+(``δ ≈ a0 + a1·cos θ + a2·sin θ`` per section; a cylinder adds the tilt terms
+``h·cos θ, h·sin θ``, a cone the size slope ``h``, a sphere the centre terms): the
+linearisation errs by ``δ²/R`` (< 1e-6 mm here), so this is an independent truth for
+the non-linear fits in ``evaluate_revolved``.  No pre-travel, no noise: the only error
+left is the 4-decimal print of the DPRNT log (±5e-5 mm per coordinate), hence 1e-4 mm
+for sizes and positions and 2e-4 mm for ranges (roundness, the difference of two
+rounded residuals).  The torus's tube diameter comes from three rings on a quarter
+of a 4 mm tube; the fit magnifies the print rounding about tenfold there (the
+condition of the fit), so it is checked to 1e-3 mm, and to 1e-6 mm from the exact
+ball centres.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import REPO
+
+from probegen import cad
+from probegen.dialects import get_dialect
+from probegen.evaluate_revolved import evaluate_revolved
+from probegen.ingest import ingest, nominal_of, to_json
+from probegen.machine.probe_model import ProbeModel
+from probegen.planning import plan_program
+from probegen.planning.revolved_spec import plan_revolved
+from probegen.results import parse_dmis_output
+from probegen.sim.contact import ContactHit, PlacedPart
+from probegen.sim.form import FormError, Lobe
+from probegen.sim.vm import VirtualMachine, run_text
+from probegen.spec import load_spec
+
+SIZE, RANGE = 1e-4, 2e-4
+OFFSET = np.array([0.3, -0.2, 0.0])
+BORE_BLOCK = REPO / "samples/bore_block/bore_block.toml"
+REVOLVED_BLOCK = REPO / "samples/revolved_block/revolved_block.toml"
+BORE = FormError(8, offset=0.004, taper=2e-4, lobes=(Lobe(3, 0.004, math.radians(20.0)),))
+BOSS = FormError(7, offset=-0.006)
+CONE = FormError(7, offset=0.003, lobes=(Lobe(3, 0.004, 0.3),))
+DOME = FormError(8, offset=0.005, lobes=(Lobe(4, 0.002, 0.2),))
+RIM = FormError(6, offset=-0.002)
+
+
+def run(spec_path: Path, forms: tuple[FormError, ...], dialect: str,
+        tmp_path: Path) -> tuple[str, VirtualMachine]:
+    spec = load_spec(spec_path)
+    d = get_dialect(dialect)
+    text = d.generate(plan_program(spec, runtime_variables=d.RUNTIME_VARIABLES).program)
+    assert spec.model is not None
+    part = PlacedPart.from_model(cad.load_step(spec.model), translation=OFFSET, forms=forms)
+    vm = VirtualMachine(part, ProbeModel(3.0))
+    res = run_text(text, vm, kind="dmis" if dialect == "dmis" else "macrob")
+    assert res.alarm is None
+    return res.output, vm
+
+
+def planted(vm: VirtualMachine, form: FormError, centre: tuple[float, float, float],
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """θ (about the true axis through ``centre``), h and δ at every touch of the face."""
+    hits: list[ContactHit] = [t for t in vm.touches if t.face_id == form.face]
+    rel = np.array([t.point for t in hits]) - OFFSET - np.asarray(centre)
+    theta = np.arctan2(rel[:, 1], rel[:, 0])
+    h = np.array([t.point[2] for t in hits]) - OFFSET[2]
+    if form is DOME:
+        h = rel[:, 2]  # a sphere's h runs from its centre
+    delta = np.array([form.delta(a, b) for a, b in zip(theta, h, strict=True)])
+    return theta, h, delta
+
+
+def lsq(columns: list[np.ndarray], delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Linear least squares: coefficients and residuals."""
+    a = np.column_stack(columns)
+    coef = np.linalg.lstsq(a, delta, rcond=None)[0]
+    return coef, delta - a @ coef
+
+
+def rings(theta: np.ndarray, h: np.ndarray, delta: np.ndarray
+          ) -> dict[float, tuple[float, float]]:
+    """Per section height: (size change a0, LS roundness)."""
+    out = {}
+    for z in sorted(set(np.round(h, 3)), reverse=True):
+        m = np.isclose(h, z, atol=0.01)
+        coef, res = lsq([np.ones(m.sum()), np.cos(theta[m]), np.sin(theta[m])], delta[m])
+        out[float(z)] = (float(coef[0]), float(np.ptp(res)))
+    return out
+
+
+def chars(result: object) -> dict[str, float]:
+    return {c.name: c.measured for c in result.characteristics}  # type: ignore[attr-defined]
+
+
+def test_fanuc_bore_block_size_taper_roundness(tmp_path: Path) -> None:
+    output, vm = run(BORE_BLOCK, (BORE, BOSS), "fanuc", tmp_path)
+    log = tmp_path / "run.log"
+    log.write_text(output)
+    ing = ingest(log, load_spec(BORE_BLOCK))
+    assert not ing.notes
+    bore, boss = (chars(r) for r in ing.revolved)
+    theta, h, delta = planted(vm, BORE, (50.0, 50.0, 0.0))
+    sections = rings(theta, h, delta)
+    (a_top, ron_top), (a_bottom, ron_bottom) = sections[40.0], sections[10.0]
+    assert bore["D_S1"] == pytest.approx(50.0 + 2 * a_top, abs=SIZE)
+    assert bore["D_S2"] == pytest.approx(50.0 + 2 * a_bottom, abs=SIZE)
+    assert bore["TAPER"] == pytest.approx(2 * (a_top - a_bottom), abs=SIZE)
+    assert bore["TAPER"] == pytest.approx(2 * 2e-4 * 30.0, abs=SIZE)  # as planted
+    assert bore["RON_S1"] == pytest.approx(ron_top, abs=RANGE)
+    assert bore["RON_S2"] == pytest.approx(ron_bottom, abs=RANGE)
+    assert ron_top > 0.007  # the 3 lobes (2 x 0.004 peak to valley), sampled at 8 points
+    z = h - 25.0
+    coef, res = lsq([np.ones_like(z), np.cos(theta), np.sin(theta), z * np.cos(theta),
+                     z * np.sin(theta)], delta)
+    assert bore["D"] == pytest.approx(50.0 + 2 * coef[0], abs=SIZE)
+    assert bore["FORM"] == pytest.approx(np.ptp(res), abs=RANGE)
+    shift = OFFSET[:2] + coef[1:3]
+    assert bore["X"] == pytest.approx(50.0 + shift[0], abs=SIZE)
+    assert bore["Y"] == pytest.approx(50.0 + shift[1], abs=SIZE)
+    assert bore["POS"] == pytest.approx(2 * float(np.hypot(*shift)), abs=2 * SIZE)
+    assert boss["D"] == pytest.approx(20.0 - 0.012, abs=SIZE)
+    assert boss["X"] == pytest.approx(20.3, abs=SIZE)
+    js = to_json(ing)
+    assert '"name": "TAPER"' in js and '"name": "RON_S2"' in js
+    from probegen.report.html import render_report
+
+    html = render_report(json.loads(js))
+    assert all(f">{name}<" in html for name in ("D_S1", "RON_S1", "TAPER", "TILT"))
+
+
+def test_dmis_bore_block_with_forms_on_the_virtual_cmm(tmp_path: Path) -> None:
+    output, vm = run(BORE_BLOCK, (BORE, BOSS), "dmis", tmp_path)
+    bore = parse_dmis_output(output, strict=True).feature("BORE")
+    theta, h, delta = planted(vm, BORE, (50.0, 50.0, 0.0))
+    z = h - 25.0
+    coef, _ = lsq([np.ones_like(z), np.cos(theta), np.sin(theta), z * np.cos(theta),
+                   z * np.sin(theta)], delta)
+    assert bore.diameter == pytest.approx(50.0 + 2 * coef[0], abs=SIZE)
+    assert np.allclose(np.array(bore.position)[:2], 50.0 + OFFSET[:2] + coef[1:3], atol=SIZE)
+
+
+@pytest.fixture(scope="module")
+def revolved_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[object, VirtualMachine]:
+    tmp = tmp_path_factory.mktemp("revolved")
+    output, vm = run(REVOLVED_BLOCK, (CONE, DOME, RIM), "fanuc", tmp)
+    log = tmp / "run.log"
+    log.write_text(output)
+    ing = ingest(log, load_spec(REVOLVED_BLOCK))
+    assert not ing.notes and [r.kind for r in ing.revolved] == ["cone", "sphere", "torus"]
+    return ing, vm
+
+
+def test_fanuc_cone_gauge_diameters_and_roundness(
+        revolved_run: tuple[object, VirtualMachine]) -> None:
+    ing, vm = revolved_run
+    cone = chars(ing.revolved[0])  # type: ignore[attr-defined]
+    theta, h, delta = planted(vm, CONE, (25.0, 75.0, 0.0))
+    coef, _ = lsq([np.ones_like(h), h, np.cos(theta), np.sin(theta), h * np.cos(theta),
+                   h * np.sin(theta)], delta)
+    for name, z, nominal in (("D_S1", 45.0, 18.0), ("D_S2", 35.0, 22.0)):
+        assert cone[name] == pytest.approx(nominal + 2 * (coef[0] + coef[1] * z), abs=SIZE)
+    # the ring heights differ a little (the part is off), so the section roundness is
+    # compared with the planted lobes' range over each ring
+    sections = rings(theta, np.where(h > 40.0, 45.0, 35.0), delta)
+    assert len(sections) == 2
+    for k, (_, ron) in enumerate(sections.values(), start=1):
+        assert cone[f"RON_S{k}"] == pytest.approx(ron, abs=RANGE)
+    assert cone["ANGLE"] == pytest.approx(math.degrees(math.atan(0.2)), abs=1e-3)
+    assert cone["X"] == pytest.approx(25.3, abs=SIZE)
+    assert cone["Y"] == pytest.approx(74.8, abs=SIZE)
+
+
+def test_fanuc_sphere_and_torus(revolved_run: tuple[object, VirtualMachine]) -> None:
+    ing, vm = revolved_run
+    _, dome, rim = (chars(r) for r in ing.revolved)  # type: ignore[attr-defined]
+    theta, h, delta = planted(vm, DOME, (75.0, 75.0, 30.0))
+    polar = np.arccos(np.clip(h / 15.0, -1.0, 1.0))
+    u = [np.sin(polar) * np.cos(theta), np.sin(polar) * np.sin(theta), np.cos(polar)]
+    coef, res = lsq([np.ones_like(h), *u], delta)
+    assert dome["D"] == pytest.approx(30.0 + 2 * coef[0], abs=SIZE)
+    assert dome["FORM"] == pytest.approx(np.ptp(res), abs=RANGE)
+    assert dome["X"] == pytest.approx(75.3 + coef[1], abs=SIZE)
+    assert dome["Z"] == pytest.approx(30.0 + coef[3], abs=SIZE)
+    assert rim["D"] == pytest.approx(8.0 - 0.004, abs=1e-3)
+    assert rim["DMAJ"] == pytest.approx(38.0, abs=1e-3)
+
+
+def test_torus_from_exact_ball_centres(revolved_run: tuple[object, VirtualMachine]) -> None:
+    _, vm = revolved_run
+    spec = load_spec(REVOLVED_BLOCK)
+    rim = next(f for f in spec.features if f.id == "RIM")
+    plan = plan_revolved(rim, spec.model, spec.machine, spec.clearance_z)  # type: ignore[arg-type]
+    centres = [t.centre for t in vm.touches if t.face_id == RIM.face]
+    sections = [plan.section_of_touch[k] for k in sorted(plan.normals)]
+    res = evaluate_revolved("RIM", nominal_of(plan), centres, sections, ball_radius=3.0,
+                            limits=rim.tolerance)  # type: ignore[arg-type]
+    got = chars(res)
+    assert got["D"] == pytest.approx(8.0 - 0.004, abs=1e-6)
+    assert got["DMAJ"] == pytest.approx(38.0, abs=1e-6)
+    assert got["POS"] == pytest.approx(2 * math.hypot(0.3, 0.2), abs=1e-6)
+
+
+def test_dmis_cone_and_sphere_with_forms_on_the_virtual_cmm(tmp_path: Path) -> None:
+    text = REVOLVED_BLOCK.read_text().split('[[feature]]\nid = "RIM"')[0]
+    spec_path = tmp_path / "cone_dome.toml"
+    spec_path.write_text(text.replace('"revolved_block.step"',
+                                      f'"{REVOLVED_BLOCK.parent / "revolved_block.step"}"')
+                         .replace('"../machines/', f'"{REPO / "samples/machines"}/'))
+    output, vm = run(spec_path, (CONE, DOME), "dmis", tmp_path)
+    out = parse_dmis_output(output, strict=True)
+    dome = out.feature("DOME")
+    theta, h, delta = planted(vm, DOME, (75.0, 75.0, 30.0))
+    polar = np.arccos(np.clip(h / 15.0, -1.0, 1.0))
+    u = [np.sin(polar) * np.cos(theta), np.sin(polar) * np.sin(theta), np.cos(polar)]
+    coef, _ = lsq([np.ones_like(h), *u], delta)
+    assert dome.diameter == pytest.approx(30.0 + 2 * coef[0], abs=SIZE)
+    want = np.array([75.0, 75.0, 30.0]) + OFFSET + coef[1:]
+    assert np.allclose(dome.position, want, atol=SIZE)
+    cone = out.feature("CONE")
+    # the apex (the CMM reports it): 0.003 mm more radius moves it 0.003 / tan α up
+    assert np.allclose(cone.position, [25.3, 74.8, 90.0 + 0.003 / 0.2], atol=1e-3)
+
+
+def test_too_few_sections_or_touches_are_notes(tmp_path: Path) -> None:
+    """A log without the last ring of the torus and the dome's lower ring: each is left
+    out with a note saying what was missing; the cone (all its touches) is evaluated."""
+    output, _ = run(REVOLVED_BLOCK, (), "fanuc", tmp_path)
+    drop = {("RIM", k) for k in range(17, 25)} | {("DOME", k) for k in range(9, 17)}
+    kept = [line for line in output.splitlines(keepends=True)
+            if not (line.startswith("PT ") and (line.split()[1], int(line.split()[2])) in drop)]
+    log = tmp_path / "cut.log"
+    log.write_text("".join(kept))
+    ing = ingest(log, load_spec(REVOLVED_BLOCK))
+    assert [r.feature for r in ing.revolved] == ["CONE"]
+    assert "feature DOME: not evaluated, 8 touches in 1 sections (at least 5 needed, in 2 " \
+        "sections)" in ing.notes
+    assert "feature RIM: not evaluated, 16 touches in 2 sections (at least 8 needed, in 3 " \
+        "sections)" in ing.notes
+    assert "feature RIM: no touch for points 17-24" in ing.notes
+
+
+def test_revolved_block_step_is_repeatable(tmp_path: Path) -> None:
+    spec = importlib.util.spec_from_file_location(
+        "revolved_block_make_model", REPO / "samples/revolved_block/make_model.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    fresh = module.main(tmp_path / "revolved_block.step")
+    assert fresh.read_bytes() == (REPO / "samples/revolved_block/revolved_block.step").read_bytes()
