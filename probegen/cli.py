@@ -497,6 +497,13 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--title", help="title of the report")
     rp.set_defaults(func=_report)
     _post_parsers(sub)
+
+    from probegen.cli_rotary import add_rotary_commands
+
+    add_rotary_commands(sub)
+    from probegen.grating import add_grating_commands  # M5: probegen grating ...
+
+    add_grating_commands(sub)
     return parser
 
 

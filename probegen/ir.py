@@ -145,6 +145,14 @@ class Touch:
 
 
 @dataclass(frozen=True, slots=True)
+class Dwell:
+    """Stand still for ``seconds`` (a sampling stop of a measuring instrument, e.g. a
+    grating reading head; Fanuc and LinuxCNC ``G4``)."""
+
+    seconds: float
+
+
+@dataclass(frozen=True, slots=True)
 class Assign:
     """``name = (a + b) / 2`` when ``b`` is given, else ``name = a + offset``."""
 
@@ -311,8 +319,35 @@ class RestoreFrame:
     name: str
 
 
-Node = (Comment | Move | Touch | Assign | ReportCentre | FeatureBlock | LocalFrame | RestoreFrame
-        | ActionNode)
+@dataclass(frozen=True, slots=True)
+class Rotary:
+    """Turn the rotary axes of a five-axis machine, the linear axes standing still.
+
+    Attributes:
+        b: machine angle of the B axis (head tilt), deg, or None to leave it.
+        c: machine angle of the C axis (table), deg, or None to leave it.
+        head_shift: the nominal ball-centre shift of the head pose after the turn, mm:
+            where the ball centre is less the commanded point (no tool-centre-point
+            control; zero at ``B = 0``).  Points after this node stay ball centres;
+            a dialect commands ``point − head_shift``.
+    """
+
+    b: float | None
+    c: float | None
+    head_shift: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class WorkOffsetShift:
+    """Add ``shift`` (mm, X Y Z) to the work offset ``work_offset`` (``G54`` .. ``G59``):
+    a compensation the program applies, e.g. method M4's ``-δ`` along X."""
+
+    work_offset: str
+    shift: Vec3
+
+
+Node = (Comment | Move | Touch | Dwell | Assign | ReportCentre | FeatureBlock | LocalFrame
+        | RestoreFrame | Rotary | WorkOffsetShift | ActionNode)
 
 
 @dataclass(frozen=True, slots=True)

@@ -77,6 +77,9 @@ class Fraction:
         self.hits.append((x, y, z))
         return x, y, z
 
+    def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        pass
+
 
 class FirstSkip(Fraction):
     """Fires on the very first G31 move only (the first protected move of our programs)."""
@@ -862,3 +865,65 @@ def test_g68_stays_in_the_result_and_a_block_with_it_does_not_move() -> None:
     m = FreeMachine(record=True)
     res = run("G90 G17 G21\nG68 X50. Y50. R0.5\nM30\n", m)
     assert res.rotation == (50.0, 50.0, 0.5) and m.moves == []
+
+
+# --- rotary axes (B, C of a five-axis machine) -------------------------------------------
+
+
+def turns(text: str, **kwargs: Any) -> tuple[RunResult, list[tuple[dict[str, float],
+                                                                   dict[str, float]]]]:
+    machine = FreeMachine(record=True)
+    result = run(text, machine, **kwargs)
+    assert result.alarm is None, result.alarm
+    return result, machine.turns
+
+
+def test_rotary_moves_reach_the_machine_and_read_back() -> None:
+    result, done = turns("G0 B90. C10.\nG1 B-45. F1000.\n#1=#5024\n#2=#5025\n#3=#5044")
+    assert done == [({"B": 0.0, "C": 0.0}, {"B": 90.0, "C": 10.0}),
+                    ({"B": 90.0, "C": 10.0}, {"B": -45.0, "C": 10.0})]
+    assert [result.variables[k] for k in (1, 2, 3)] == [-45.0, 10.0, -45.0]
+
+
+def test_c_rolls_over_the_short_way_and_b_does_not() -> None:
+    result, done = turns("G0 C350.\nG0 C10.\nG91 G0 C-30.\nG90 G0 B170.\nG0 B-170.\n"
+                         "#1=#5025")
+    assert [d[1] for d in done] == [
+        {"B": 0.0, "C": -10.0}, {"B": 0.0, "C": 370.0}, {"B": 0.0, "C": -20.0},
+        {"B": 170.0, "C": 340.0}, {"B": -170.0, "C": 340.0}]
+    assert result.variables[1] == 340.0  # C reads back in [0, 360)
+
+
+def test_rotary_work_offsets_and_machine_positioning() -> None:
+    result, done = turns("G10 L2 P1 C30.\nG54 G0 C0\n#1=#5025\n#2=#5045\nG53 C0\n#3=#5045\n"
+                         "G0 C45\n")
+    assert [d[1]["C"] for d in done] == [30.0, 0.0, 30.045]  # C45 counts 0.001 deg steps
+    assert [result.variables[k] for k in (1, 2, 3)] == [30.0, 0.0, -30.0]
+
+
+@pytest.mark.parametrize(("text", "number"), [
+    ("G31 B10. F100.", 9010),
+    ("G0 X1. B10.", 9010),
+    ("G28 C0", 9010),
+    ("G1 B10.", 11),
+])
+def test_rotary_alarms(text: str, number: int) -> None:
+    assert alarm_of(text) == number
+
+
+def test_a_machine_without_rotary_axes_refuses_them() -> None:
+    result = run("G0 B90.", Recorder())
+    assert result.alarm is not None and result.alarm.number == 9010
+    assert "AXIS B" in result.alarm.message
+
+
+def test_c_rollover_follows_the_fanuc_manual_example() -> None:
+    """Fanuc 0i manual B-63534EN/02, 20.2.1 (ROA = 1, RAB = 0), with C for its A axis:
+    the movements -150, -30, -80, +380, -840 and the coordinates 210, 180, 100, 120, 0."""
+    result, done = turns("G90 C0\nG90 C-150.\nG90 C540.\nG90 C-620.\nG91 C380.\nG91 C-840.\n"
+                         "#1=#5025")
+    moved = [round(end["C"] - start["C"], 9) for start, end in done[1:]]
+    assert moved == [-150.0, -30.0, -80.0, 380.0, -840.0]
+    assert [round(end["C"] % 360.0, 9) for _, end in done[1:]] == [210.0, 180.0, 100.0, 120.0,
+                                                                  0.0]
+    assert result.variables[1] == 0.0

@@ -60,6 +60,8 @@ class Dialect:
 
     def __init__(self) -> None:
         self.units = "mm"
+        self.shift: ir.Vec3 = (0.0, 0.0, 0.0)
+        """The head shift of the last ``ir.Rotary`` (ball centre less commanded point)."""
 
     # -- numbers ------------------------------------------------------------------
     def scale(self, mm: float) -> float:
@@ -99,6 +101,26 @@ class Dialect:
             return (f"FEATURE {f.id} TORUS {side} D{self.length(f.major_diameter)} "
                     f"T{self.length(f.minor_diameter)}")
         return f"FEATURE {f.id} CONE {side} A{self.num(2.0 * math.degrees(f.half_angle), 4)}"
+
+    def commanded(self, p: ir.Point) -> ir.Point:
+        """The commanded point for ball centre ``p`` at the current head pose (a five-axis
+        head without tool-centre-point control: the point less ``shift``)."""
+        x, y, z = (c + -s if s else c for c, s in zip(p, self.shift, strict=True))
+        return x, y, z
+
+    def rotary_words(self, node: ir.Rotary) -> str:
+        """``B.. C..`` of a rotary move (machine angles, deg); takes its head shift."""
+        words = [f"{a}{self.num(v, 4)}" for a, v in (("B", node.b), ("C", node.c))
+                 if v is not None]
+        if not words:
+            raise self.unsupported(node, "a rotary move names B or C")
+        self.shift = node.head_shift
+        return " ".join(words)
+
+    @staticmethod
+    def offset_number(work_offset: str) -> int:
+        """The ``P`` of ``G10 L2`` for work offset ``G54`` .. ``G59`` (1 .. 6)."""
+        return int(work_offset[1:]) - 53
 
     def var(self, name: str) -> str:
         """How the program names run-time value ``name``; dialects with variables say."""
@@ -143,6 +165,7 @@ class Dialect:
     def generate(self, program: ir.Program) -> str:
         """The program text; lines end with ``\\n``; byte-for-byte repeatable."""
         self.units = program.setup.units
+        self.shift = (0.0, 0.0, 0.0)
         text = self.render("program.j2", **self.lower(program))
         self.check_lines(text)
         return text

@@ -74,6 +74,9 @@ class Dmis(Dialect):
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One top-level IR node as the values its template macro prints."""
+        if isinstance(node, ir.Rotary | ir.WorkOffsetShift):
+            raise self.unsupported(node, "a CMM program has no rotary axes or machine work "
+                                         "offsets; method M4 emits Fanuc Macro B and LinuxCNC")
         if isinstance(node, ir.Comment):
             return {"kind": "comment", "text": node.text}
         if isinstance(node, ir.Move):

@@ -18,6 +18,13 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
   ``docs/dprnt-format.md`` inside POPEN/PCLOS.
 * Run-time values live in common variables from the profile's ``variable_base``
   (``#100`` by default): named values from base+0, scratch at base+90..base+93.
+* Rotary axes (``ir.Rotary``): ``G53 B.. C..``, machine angles, so no rotary work
+  offset is relied upon; the linear axes stand still.  Without tool-centre-point
+  control X, Y, Z command the ball centre as it is at ``B = 0``: every point after a
+  tilt is commanded less the node's ``head_shift``; the DPRNT skip positions are the
+  commanded point too (the reader adds the shift back).
+* ``ir.WorkOffsetShift``: ``G91 G10 L2 Pn X.. Y.. Z..`` (in G91 the values add to the
+  offset), then ``G90``.
 """
 
 from __future__ import annotations
@@ -117,11 +124,25 @@ class Fanuc(Dialect):
             return self.touch(node)
         if isinstance(node, ir.Assign):
             return self.assign(node)
+        if isinstance(node, ir.Dwell):
+            return {"kind": "dwell", "p": f"{round(node.seconds * 1000.0):d}"}
         if isinstance(node, ir.ReportCentre):
             return self.centre(node)
         if isinstance(node, ir.Check | ir.SetWorkOffset | ir.UpdateTool | ir.Align):
             return {"kind": "lines", "lines": lower_action(self, node)}
+        if isinstance(node, ir.Rotary):
+            return self.rotary(node)
+        if isinstance(node, ir.WorkOffsetShift):
+            return self.offset_shift(node)
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
+
+    def rotary(self, node: ir.Rotary) -> dict[str, Any]:
+        """``G53 B.. C..``; later points are commanded less the new head shift."""
+        return {"kind": "rotary", "words": self.rotary_words(node)}
+
+    def offset_shift(self, node: ir.WorkOffsetShift) -> dict[str, Any]:
+        number = self.offset_number(node.work_offset)
+        return {"kind": "offset", "p": number, "xyz": [self.length(v) for v in node.shift]}
 
     def centre(self, node: ir.ReportCentre) -> dict[str, Any]:
         xyz = []
@@ -133,11 +154,11 @@ class Fanuc(Dialect):
                 "fmt": self.DPRNT_FORMAT[self.units]}
 
     def targets(self, p: ir.Point) -> list[str]:
-        """Assignments of a target point to the three scratch variables."""
-        return [f"{self.scratch(k)}={self.expr(c)}" for k, c in enumerate(p)]
+        """Assignments of a target ball centre's commanded point to the scratch variables."""
+        return [f"{self.scratch(k)}={self.expr(c)}" for k, c in enumerate(self.commanded(p))]
 
     def move(self, node: ir.Move, feature: str) -> dict[str, Any]:
-        xyz = [self.addr(c) for c in node.target]
+        xyz = [self.addr(c) for c in self.commanded(node.target)]
         if node.mode is ir.MoveMode.RAPID:
             return {"kind": "rapid", "xyz": xyz}
         if node.mode is ir.MoveMode.RETRACT:

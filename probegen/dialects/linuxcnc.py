@@ -25,6 +25,10 @@ reference):
 * Results are ``(LOG,...)`` lines in the line format of ``docs/dprnt-format.md``, the
   probe position printed as ``%.4f#5061`` (``%.5f`` in inch), so
   :func:`probegen.results.parse_dprnt` reads the log as it is.
+* Rotary axes (``ir.Rotary``): ``G53 G0 B.. C..`` (machine angles); every later point
+  is commanded less the node's ``head_shift`` (no tool-centre-point control, as in the
+  Fanuc dialect).  ``ir.WorkOffsetShift``: ``G10 L2 Pn X[#5221+dx] ...`` (the current
+  value plus the shift, written out: LinuxCNC's G10 L2 does not add in G91).
 * Run-time values are global named parameters ``#<_pg_name>``; ``variable_base`` is not
   used (numbered parameters would share the operator's ``#31-#5000``).
 """
@@ -152,6 +156,11 @@ class LinuxCnc(Dialect):
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One IR node as the values its template macro prints."""
+        if isinstance(node, ir.Rotary):
+            self.position = None
+            return {"kind": "rotary", "words": self.rotary_words(node)}
+        if isinstance(node, ir.WorkOffsetShift):
+            return self.offset_shift(node)
         if isinstance(node, ir.Comment):
             return {"kind": "comment", "text": self.comment(node.text)}
         if isinstance(node, ir.FeatureBlock):
@@ -173,8 +182,17 @@ class LinuxCnc(Dialect):
                                    f"(and tolerances and frames for dmis) only")
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
 
+    def offset_shift(self, node: ir.WorkOffsetShift) -> dict[str, Any]:
+        """``G10 L2 Pn`` with each axis its current value plus the shift (G10 L2 ignores
+        G91 on LinuxCNC, so the sum is written out)."""
+        number = self.offset_number(node.work_offset)
+        first = 5201 + 20 * number
+        xyz = [f"[#{first + k}+{self.length(v)}]" if v >= 0 else
+               f"[#{first + k}-{self.length(-v)}]" for k, v in enumerate(node.shift)]
+        return {"kind": "offset", "p": number, "xyz": xyz}
+
     def move(self, node: ir.Move, feature: str) -> dict[str, Any]:
-        xyz = [self.expr(c) for c in node.target]
+        xyz = [self.expr(c) for c in self.commanded(node.target)]
         f = self.feed(self.setup.position_feed)
         if node.mode is ir.MoveMode.PROTECTED:
             self.moves[feature] = self.moves.get(feature, 0) + 1
@@ -192,7 +210,8 @@ class LinuxCnc(Dialect):
         end = [c + k * n for c, n in zip(node.contact, node.normal, strict=True)]
         stores = [f"{self.param(name)} = #{5061 + axis}"
                   for axis, name in enumerate(node.store) if name is not None]
-        return {"kind": "touch", "xyz": [self.expr(c) for c in end],
+        point: ir.Point = (end[0], end[1], end[2])
+        return {"kind": "touch", "xyz": [self.expr(c) for c in self.commanded(point)],
                 "f": self.feed(self.setup.probe_feed), "stores": stores,
                 "tag": node.role.value, "feature": node.feature, "index": node.index,
                 "log": [self.log_number(f"#{5061 + axis}") for axis in range(3)]}

@@ -21,7 +21,14 @@ with the squareness errors.  First order, with ``t`` the tool offset and
 
 So the yaw of X shows up as ``−ε_zx·y`` in x and the pitch of Y as ``−ε_xy·(z + t_z)``
 in y; the yaw of Y acts only through the tool offset (the X table does not ride on it
-relative to the tool: it rides on the saddle, which the yaw turns as a whole).
+relative to the tool: it rides on the saddle, which the yaw turns as a whole).  The
+rotation of a rigid body moves the point under the tool by ``ε × (tool − pivot)``, and
+the tool's position relative to the saddle does not change with x.  Method M5's seed
+(003) assumes a lever arm across the plane for the second axis of every plane (yaw of Y
+from the lines at x10 and x11, and likewise for Z in XZ and YZ); on this layout those
+line pairs differ by a constant only, and the Z axis' angles act through the tool
+offset alone (``ε_Z × t``).  ``docs/m5.md`` derives the consequences (what a grating
+plan can identify); :mod:`probegen.calibrate.identify_model` is this model, linearised.
 
 ``five-axis-bc`` (method M4's machine): the workpiece sits on a C rotary table on the
 bed; X, Y, Z carry a B axis that tilts the spindle head.  Chain
@@ -42,6 +49,7 @@ Angles are radians, lengths mm.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -68,6 +76,14 @@ AXES: dict[Topology, tuple[str, ...]] = {
 }
 """Axis order of each topology: the columns of an axis-position array."""
 
+PLANES: dict[str, tuple[int, int, int]] = {"XY": (0, 1, 2), "XZ": (0, 2, 1), "YZ": (1, 2, 0)}
+"""The machine's coordinate planes: name → (first axis, second axis, normal) as indices
+into x, y, z (a planar grating in that plane reads along the first two)."""
+PLANE_OUTWARD: dict[str, float] = {"XY": 1.0, "XZ": -1.0, "YZ": -1.0}
+"""Sign, along each plane's normal axis, of the side a grating's reading head is on (the
+plate lies on the other side): above an XY plate, in front (−Y) of an XZ plate, on the
+−X side of a YZ plate."""
+
 AxisInput = Mapping[str, ArrayLike] | ArrayLike
 
 
@@ -78,10 +94,14 @@ class Machine:
     Attributes:
         topology: the machine layout.
         errors: the geometric errors (zero for a perfect machine).
+        pivot_length: five-axis only: the distance from the B axis (the pivot point)
+            down to the stylus ball centre at ``B = 0``, mm (method M4's ``l1``); the
+            tool offset is then ``(0, 0, -pivot_length)``.
     """
 
     topology: Topology = Topology.VMC
     errors: ErrorModel = field(default_factory=ErrorModel.zero)
+    pivot_length: float = 0.0
 
     @property
     def axes(self) -> tuple[str, ...]:
@@ -187,6 +207,18 @@ class Machine:
         return np.asarray(out[0] if _single(axes) and np.ndim(tool_offset) == 1 else out)
 
 
+def head_shift(b_deg: float, pivot_length: float) -> tuple[float, float, float]:
+    """``five-axis-bc``: the nominal ball centre less the commanded point at head tilt
+    ``b_deg`` (deg), mm.
+
+    X, Y, Z command the ball centre as it is at ``B = 0`` (the pivot ``pivot_length``
+    above it, no tool-centre-point control); ``+B`` turns the tool right-handed about
+    +Y through the pivot: ``(−L·sin b, 0, L·(1 − cos b))``.
+    """
+    b = math.radians(b_deg)
+    return (-pivot_length * math.sin(b), 0.0, pivot_length * (1.0 - math.cos(b)))
+
+
 def _single(axes: AxisInput) -> bool:
     """Whether ``axes`` names one machine position (not a batch)."""
     if isinstance(axes, Mapping):
@@ -270,7 +302,8 @@ def _rotary_c(e: ErrorModel, c: FloatArray) -> FloatArray:
 def load_machine(path: str | Path) -> Machine:
     """Load a machine (topology and errors) from TOML.
 
-    The file has ``[kinematics] topology = "vmc-xyfz"`` (or ``"five-axis-bc"``) and an
+    The file has ``[kinematics] topology = "vmc-xyfz"`` (or ``"five-axis-bc"``, with
+    ``pivot_length`` in mm: B axis to ball centre, see :attr:`Machine.pivot_length`) and an
     ``[errors]`` table (see :func:`probegen.machine.errors_model.load_errors`);
     ``samples/machines/errors-example.toml`` and ``five-axis-bc.toml`` are examples.
 
@@ -281,7 +314,10 @@ def load_machine(path: str | Path) -> Machine:
     k = root.table("kinematics", required=True)
     name = k.get_str("topology", required=True, choices=tuple(t.value for t in Topology))
     topology = Topology(name or Topology.VMC.value)
+    pivot = 0.0
+    if topology is Topology.FIVE_AXIS_BC:
+        pivot = k.get_float("pivot_length", 0.0, minimum=0.0) or 0.0
     k.done()
     errors = read_errors(root.table("errors")) if root.has("errors") else ErrorModel.zero()
     root.done()
-    return Machine(topology, errors)
+    return Machine(topology, errors, pivot)

@@ -52,6 +52,7 @@ __all__ = [
     "FreeMachine",
     "Machine",
     "Point",
+    "RotaryMachine",
     "RunResult",
     "Settings",
     "SimAlarm",
@@ -83,16 +84,28 @@ class Machine(Protocol):
         ...
 
 
+class RotaryMachine(Machine, Protocol):
+    """A machine with rotary axes: the control also calls :meth:`rotate` (a machine
+    without the method makes B and C words raise alarm 9010)."""
+
+    def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        """Turn the rotary axes from ``start`` to ``end`` (machine angles by axis letter,
+        deg; linear in angle, C possibly past 360) with the linear axes at ``at``."""
+        ...
+
+
 class FreeMachine:
     """A machine with no part: nothing is ever touched, every move succeeds.
 
     ``moves`` records ``(kind, start, end)`` of each call (kind ``"rapid"``, ``"feed"``
-    or ``"skip"``) when ``record`` is True.
+    or ``"skip"``) when ``record`` is True; ``turns`` records ``(start, end)`` angles of
+    each rotary move.
     """
 
     def __init__(self, *, record: bool = False) -> None:
         self.record = record
         self.moves: list[tuple[str, Point, Point]] = []
+        self.turns: list[tuple[dict[str, float], dict[str, float]]] = []
 
     def rapid(self, start: Point, end: Point) -> None:
         if self.record:
@@ -106,6 +119,10 @@ class FreeMachine:
         if self.record:
             self.moves.append(("skip", start, end))
         return None
+
+    def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        if self.record:
+            self.turns.append((dict(start), dict(end)))
 
 
 @dataclass(frozen=True, slots=True)

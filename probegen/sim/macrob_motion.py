@@ -24,7 +24,26 @@ G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G68 (G17 only) G69 G80 G9
 G91 G94 G96-G99 G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42,
 scaling G51, canned cycles, G52, G92, G95 ...) raise alarm 9010 (not supported by
 the virtual machine); a G code Fanuc does not have raises alarm 10.  Axes other than
-X, Y, Z raise alarm 9010: a dropped move would crash a real machine.
+X, Y, Z, B, C raise alarm 9010: a dropped move would crash a real machine.
+
+Rotary axes (a five-axis B/C machine: B the 4th axis, C the 5th), in degrees:
+
+* ``G0``/``G1``/``G53`` with B and/or C words position the rotary axes while X, Y, Z
+  stand still; a block naming linear and rotary axes together, and G31 or G28 with a
+  rotary word, raise alarm 9010 (positioning only; probing with the rotary axes
+  stationary).  The machine is told through ``Machine.rotate``; a machine without it
+  (or without rotary axes) raises alarm 9010 too.
+* Work angle = machine angle − (external + selected work offset) of that axis
+  (``#5224``/``#5225`` for G54 ...; ``G10 L2 Pn B.. C..`` writes them).
+* B is a linear-type rotary axis (no rollover: ``B-90.`` from ``B90.`` turns through
+  0).  C rolls over (Fanuc parameter 1008 ROA = 1, RAB = 0; 0i manual B-63534EN 20.2.1,
+  whose example is a test): an absolute command turns the shorter way (a half turn: the
+  positive way, as the 15i manual says) and the position reads back in [0, 360); an
+  incremental command turns by the amount given.
+* A value without a decimal point counts least input increments of 0.001 deg
+  (``B90`` = 0.09 deg) unless calculator input is on, as for lengths.
+* Rotary feed under G94 is deg/min; rapid turns use ``Settings.rapid_mm_min`` as
+  deg/min on the virtual clock.
 """
 
 from __future__ import annotations
@@ -62,6 +81,13 @@ Word = tuple[str, float, bool]
 """An evaluated word: letter, value, and whether it was an integer literal (``X10``)."""
 
 AXIS_LETTERS = "XYZ"
+ROTARY_SLOTS = {"B": 3, "C": 4}
+"""Rotary axis letter → its index in a work-offset set and in #5001-style axis numbers
+(the 4th and 5th axes of a five-axis B/C machine)."""
+ROLLOVER = frozenset("C")
+"""Rotary axes with rollover and shortest-path absolute positioning."""
+ANGLE_INCREMENT = 0.001
+"""Least input increment of a rotary axis, deg (IS-B)."""
 MODAL_GROUPS: dict[int, int] = {
     0: 1, 10: 1, 170: 2, 180: 2, 190: 2, 900: 3, 910: 3, 940: 5, 200: 6, 210: 6, 400: 7,
     430: 8, 440: 8, 490: 8, 800: 9, 980: 10, 990: 10, 500: 11, 670: 12, 960: 13, 970: 13,
@@ -119,6 +145,8 @@ class Motion:
         self.position: Point = settings.home
         self.work = [0.0, 0.0, 0.0]
         self.skip_point: Point = (0.0, 0.0, 0.0)
+        self.angles: dict[str, float] = dict.fromkeys(ROTARY_SLOTS, 0.0)
+        """Machine angles of the rotary axes, deg (C in [0, 360))."""
         self.version = -1
         self.offset: Point = (0.0, 0.0, 0.0)
         self.rotation: tuple[float, float, float] | None = None
@@ -191,7 +219,10 @@ class Motion:
             self.rotation = None
             self.work = self.to_work(self.position)
         axes = self.axes(addr, one_shot)
-        if one_shot == DWELL:
+        turns = self.rotary_words(addr, one_shot)
+        if turns:
+            self.turn(turns, axes, one_shot)
+        elif one_shot == DWELL:
             self.dwell(addr)
         elif one_shot == REFERENCE:
             self.reference(axes)
@@ -253,13 +284,63 @@ class Motion:
         self.refresh()
 
     def axes(self, addr: dict[str, tuple[float, bool]], one_shot: int | None) -> dict[int, float]:
-        """Return the named X Y Z values (lengths); alarm for other axes."""
-        for letter in "ABCUVW":
+        """Return the named X Y Z values (lengths); alarm for axes not modelled."""
+        for letter in "AUVW":
             if letter in addr:
                 raise alarm(UNSUPPORTED, f"AXIS {letter}")
         if one_shot == DWELL:
             return {}
         return {i: self.length(*addr[a]) for i, a in enumerate(AXIS_LETTERS) if a in addr}
+
+    def angle(self, value: float, integer: bool) -> float:
+        """A rotary axis value as written, deg (an integer literal counts increments)."""
+        return value if not integer or self.settings.calculator_input else (
+            value * ANGLE_INCREMENT)
+
+    def rotary_words(self, addr: dict[str, tuple[float, bool]],
+                     one_shot: int | None) -> dict[str, float]:
+        """The named B and C values, deg (none for G4 and G10, which read them otherwise)."""
+        if one_shot in (DWELL, DATA):
+            return {}
+        return {a: self.angle(*addr[a]) for a in ROTARY_SLOTS if a in addr}
+
+    # -- rotary axes --------------------------------------------------------------------
+    def rotary_offset(self, letter: str) -> float:
+        """External + selected work offset of rotary axis ``letter``, deg."""
+        slot = ROTARY_SLOTS[letter]
+        return (self.store.work_offset(EXTERNAL)[slot]
+                + self.store.work_offset(self.wcs)[slot])
+
+    def turn(self, turns: dict[str, float], axes: dict[int, float], one_shot: int | None) -> None:
+        """Position the rotary axes (G0, G1 or G53) with the linear axes standing still."""
+        names = "".join(turns)
+        if one_shot in (SKIP, REFERENCE):
+            raise alarm(UNSUPPORTED, f"{_g(one_shot)} WITH ROTARY AXIS {names}")
+        if axes:
+            raise alarm(UNSUPPORTED, f"LINEAR AND ROTARY AXES IN ONE BLOCK ({names})")
+        rotate = getattr(self.machine, "rotate", None)
+        if rotate is None:
+            raise alarm(UNSUPPORTED, f"AXIS {names[0]}")
+        start = dict(self.angles)
+        end = dict(start)
+        incremental = self.modal[3] == 91.0 and one_shot != MACHINE
+        for letter, value in turns.items():
+            if one_shot == MACHINE:
+                target = value
+            elif incremental:
+                target = start[letter] + value
+            else:
+                target = value + self.rotary_offset(letter)
+            if letter in ROLLOVER and not incremental:
+                target -= 360.0 * math.ceil((target - start[letter] - 180.0) / 360.0)
+            end[letter] = target
+        swept = max(abs(end[a] - start[a]) for a in end)
+        linear = self.modal[1] == 1.0 and one_shot != MACHINE
+        if linear and self.feed <= 0:
+            raise alarm(FEED_ZERO, "G1")
+        self.clock_ms += swept / (self.feed if linear else self.settings.rapid_mm_min) * 60_000.0
+        rotate(start, end, self.position)
+        self.angles = {a: v % 360.0 if a in ROLLOVER else v for a, v in end.items()}
 
     # -- moves ------------------------------------------------------------------------
     def target(self, axes: dict[int, float]) -> list[float]:
@@ -377,6 +458,10 @@ class Motion:
             if letter in addr:
                 value = self.length(*addr[letter])
                 self.store.set_work_offset(key, i, values[i] * add + value)
+        for letter, slot in ROTARY_SLOTS.items():
+            if letter in addr:
+                value = self.angle(*addr[letter])
+                self.store.set_work_offset(key, slot, values[slot] * add + value)
         self.sync()
 
     # -- system variables ---------------------------------------------------------------
@@ -401,7 +486,7 @@ class Motion:
     def axis_value(self, kind: int, axis: int) -> float:
         """#5001 + 20 kind + axis: end point, machine, work, skip, tool length, deviation."""
         if axis >= 3:
-            return 0.0
+            return self.rotary_value(kind, axis)
         if kind == 0 or kind == 2:
             return self.work[axis]
         if kind == 1:
@@ -411,6 +496,14 @@ class Motion:
         if kind == 4:
             return self.tlo if axis == 2 else 0.0
         return 0.0
+
+    def rotary_value(self, kind: int, axis: int) -> float:
+        """The 4th (B) and 5th (C) axis of :meth:`axis_value`, deg (0 for the others)."""
+        letter = next((a for a, slot in ROTARY_SLOTS.items() if slot == axis), None)
+        if letter is None or kind not in (0, 1, 2, 3):
+            return 0.0
+        machine = self.angles[letter]
+        return machine if kind == 1 else machine - self.rotary_offset(letter)
 
     def _unknown(self, number: int) -> Value:
         raise unknown(number)

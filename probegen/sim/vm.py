@@ -16,6 +16,18 @@ DMIS interpreter's ``Cmm`` protocol:
 Frames: the part is placed in machine coordinates (``PlacedPart``).  The probe's length
 offset is zero (the controlled point is the ball centre) and the control's G54 offset is
 ``work_offset`` (zero by default, when machine coordinates are work coordinates).
+
+Rotary axes (a ``five-axis-bc`` kinematics, method M4's machine): the part sits on the
+C table, placed in the table frame (machine coordinates at ``C = 0``; see
+``machine.kinematics``), so it turns with C; B tilts the head.  X, Y, Z command the
+ball centre as it is at ``B = 0`` (the pivot is ``pivot_length`` above it; no
+tool-centre-point control), so at a tilt the nominal ball centre is the commanded
+point plus ``machine.kinematics.head_shift``.  The chain with its errors gives where the
+ball really is in the table frame; contact and collision are found there.  A rotary move (G0/G1/G53
+with B or C, the linear axes still) is followed in steps of at most
+:data:`ROTARY_STEP` deg, each step a straight chord of the ball's path, and is a
+collision (alarm 9100) if the ball meets the part.  Pre-travel is looked up in the probe
+frame, which tilts with B.  A machine without rotary axes refuses B and C (alarm 9010).
 """
 
 from __future__ import annotations
@@ -27,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from probegen.alarms import SimAlarm
-from probegen.machine.kinematics import Machine
+from probegen.machine.kinematics import Machine, Topology
 from probegen.machine.probe_model import ProbeModel
 from probegen.sim.contact import ContactHit, PlacedPart
 
@@ -37,6 +49,11 @@ COLLISION_ALARM = 9100
 """Alarm number of a stylus collision during a positioning move."""
 LEAVE_MARGIN = 1e-6
 """How clear (mm) a ball backing away from a touch must be before contact counts again."""
+UNSUPPORTED_ALARM = 9010
+"""Alarm number of a command the virtual machine does not model."""
+ROTARY_STEP = 0.25
+"""Largest rotary step (deg) between the points a rotary move is checked at; the chord
+misses the ball's arc by at most ``L·(1 − cos(step/2))``: 0.7 µm at L = 300 mm."""
 
 
 @dataclass
@@ -56,21 +73,65 @@ class VirtualMachine:
     kinematics: Machine | None = None
     touches: list[ContactHit] = field(default_factory=list)
     on_touch: Callable[[int], None] | None = None
+    angles: dict[str, float] = field(default_factory=lambda: {"B": 0.0, "C": 0.0})
+    """Machine angles of the rotary axes, deg."""
 
     @property
     def ball_radius(self) -> float:
         """The physical stylus ball radius, mm."""
         return self.probe.ball_radius
 
+    @property
+    def rotary(self) -> bool:
+        """Whether the machine has the B and C axes."""
+        return self.kinematics is not None and self.kinematics.topology is Topology.FIVE_AXIS_BC
+
     def actual(self, p: Vec3 | np.ndarray) -> np.ndarray:
-        """Where the ball centre really is when the axes are commanded to ``p``."""
+        """Where the ball centre really is (table frame) when the linear axes are
+        commanded to ``p`` (the rotary axes where they are)."""
         q = np.asarray(p, dtype=np.float64)
         if self.kinematics is None:
             return q
-        return np.asarray(self.kinematics.actual_tool_point(q, np.zeros(3)))
+        if not self.rotary:
+            return np.asarray(self.kinematics.actual_tool_point(q, np.zeros(3)))
+        length = self.kinematics.pivot_length
+        axes = [q[0], q[1], q[2] + length, np.radians(self.angles["B"]),
+                np.radians(self.angles["C"])]
+        return np.asarray(self.kinematics.actual_tool_point(axes, [0.0, 0.0, -length]))
+
+    def rotate(self, start: dict[str, float], end: dict[str, float], at: Vec3) -> None:
+        """Turn B and C (deg) with the linear axes at ``at``; alarm 9100 on contact."""
+        if not self.rotary:
+            raise SimAlarm(UNSUPPORTED_ALARM, "NOT SUPPORTED BY THE VIRTUAL MACHINE (AXIS "
+                           f"{''.join(sorted(end))}: THE MACHINE HAS NO ROTARY AXES)")
+        b0, c0 = start.get("B", self.angles["B"]), start.get("C", self.angles["C"])
+        b1, c1 = end.get("B", b0), end.get("C", c0)
+        swept = max(abs(b1 - b0), abs(c1 - c0))
+        k = np.linspace(0.0, 1.0, max(1, int(np.ceil(swept / ROTARY_STEP))) + 1)
+        assert self.kinematics is not None
+        length = self.kinematics.pivot_length
+        n = len(k)
+        axes = np.column_stack([np.full(n, at[0]), np.full(n, at[1]), np.full(n, at[2] + length),
+                                np.radians(b0 + k * (b1 - b0)), np.radians(c0 + k * (c1 - c0))])
+        path = np.asarray(self.kinematics.actual_tool_point(axes, np.array([0.0, 0.0, -length])))
+        for previous, current in zip(path[:-1], path[1:], strict=True):
+            self._clear_actual(previous, current, "ROTARY")
+        self.angles = {"B": b1, "C": c1}
+
+    def probe_frame(self, direction: np.ndarray) -> np.ndarray:
+        """A machine-frame direction in the probe frame (its z tilts with B)."""
+        if not self.rotary:
+            return direction
+        b = np.radians(self.angles["B"])
+        c, s = np.cos(b), np.sin(b)
+        return np.array([c * direction[0] - s * direction[2], direction[1],
+                         s * direction[0] + c * direction[2]])
 
     def _clear(self, start: Vec3, end: Vec3, what: str) -> None:
-        a, b = self._leave_contact(self.actual(start), self.actual(end))
+        self._clear_actual(self.actual(start), self.actual(end), what)
+
+    def _clear_actual(self, start: np.ndarray, end: np.ndarray, what: str) -> None:
+        a, b = self._leave_contact(start, end)
         hit = self.part.first_contact(a, b, self.ball_radius)
         if hit is not None:
             x, y, z = (float(v) for v in hit.point)
@@ -118,7 +179,7 @@ class VirtualMachine:
         hit = self.part.first_contact(self.actual(a), self.actual(b), self.ball_radius)
         if hit is None:
             return None
-        delay = float(self.probe.noisy_offset((b - a) / length))
+        delay = float(self.probe.noisy_offset(self.probe_frame((b - a) / length)))
         t = hit.t + delay / length
         if t > 1.0:
             return None
