@@ -20,6 +20,9 @@ same line.  The shank must clear the part along the same stretch.  A touch that 
 an angle to the surface normal (``Touch.surface``, M3 vertical probing of a slope) stops
 ``margin / cos(angle)`` short along its line, i.e. ``margin`` off a plane surface.
 
+Many short paths at once (M3 guide points): :mod:`probegen.planning.heightmap` clears
+most of them with a conservative fast check first and leaves the rest to this one.
+
 Obstacles: the tessellated STEP model as an FCL bounding-volume hierarchy (python-fcl:
 exact sphere/cylinder-to-triangle distances in C++), or analytic spheres when the spec
 gives the geometry without a model.
@@ -350,8 +353,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 raise PlanningError(f"feature {feature}: touch {node.index} does not start at "
                                     f"its approach point {_fmt(start)}")
             e = w.extra(node.contact)
-            stop = contact + (r + (clear + MIN_STEP + MESH_TOLERANCE + e) / _slant(node)) * n
-            check(start, stop, e, e, f"touch {node.role.value} {node.index}")
+            check(start, touch_stop(node, contact, r, clear, e), e, e,
+                  f"touch {node.role.value} {node.index}")
             for axis, name in enumerate(node.store):
                 if name is not None:
                     w.values[name] = float((contact + r * n - w.origin())[axis])
@@ -362,6 +365,15 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
 SLANT_FACTOR = 0.9
 """A slanted touch stops its check ``1 / (0.9·cos)`` times farther out: the plane-surface
 figure ``1 / cos`` leaves no room for the curvature of a free-form face."""
+
+
+def touch_stop(touch: ir.Touch, contact: np.ndarray, r: float, clear: float,
+               extra: float) -> np.ndarray:
+    """Where the check of a touch stops (ball centre, mm): ``clear`` + ``MIN_STEP`` +
+    ``MESH_TOLERANCE`` + ``extra`` short of the contact, along the touch's line, divided
+    by the slant (see :func:`_slant`).  ``contact`` is the touch's evaluated contact."""
+    n = np.array(touch.normal)
+    return contact + (r + (clear + MIN_STEP + MESH_TOLERANCE + extra) / _slant(touch)) * n
 
 
 def _slant(touch: ir.Touch) -> float:
