@@ -20,6 +20,9 @@ same line.  The shank must clear the part along the same stretch.  A touch that 
 an angle to the surface normal (``Touch.surface``, M3 vertical probing of a slope) stops
 ``margin / cos(angle)`` short along its line, i.e. ``margin`` off a plane surface.
 
+Many short paths at once (M3 guide points): :mod:`probegen.planning.heightmap` clears
+most of them with a conservative fast check first and leaves the rest to this one.
+
 Obstacles: the tessellated STEP model as an FCL bounding-volume hierarchy (python-fcl:
 exact sphere/cylinder-to-triangle distances in C++), or analytic spheres when the spec
 gives the geometry without a model.
@@ -392,8 +395,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 raise PlanningError(f"feature {feature}: touch {node.index} does not start at "
                                     f"its approach point {fmt(start)}")
             e = w.extra(node.contact)
-            stop = touch_stop(contact, n, r, clear + e, _slant(node))
-            check(start, stop, e, e, f"touch {node.role.value} {node.index}", touch=True)
+            check(start, touch_check_stop(node, contact, r, clear, e), e, e,
+                  f"touch {node.role.value} {node.index}", touch=True)
             for axis, name in enumerate(node.store):
                 if name is not None:
                     w.values[name] = float((contact + r * n - w.origin())[axis])
@@ -404,6 +407,14 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
 SLANT_FACTOR = 0.9
 """A slanted touch stops its check ``1 / (0.9·cos)`` times farther out: the plane-surface
 figure ``1 / cos`` leaves no room for the curvature of a free-form face."""
+
+
+def touch_check_stop(touch: ir.Touch, contact: np.ndarray, r: float, clear: float,
+                     extra: float) -> np.ndarray:
+    """Where the check of ``touch`` stops (ball centre, mm): :func:`touch_stop` with the
+    required ``clear`` + ``extra`` and the touch's slant (:func:`_slant`).  ``contact`` is
+    the touch's evaluated contact."""
+    return touch_stop(contact, np.array(touch.normal), r, clear + extra, _slant(touch))
 
 
 def _slant(touch: ir.Touch) -> float:

@@ -9,9 +9,11 @@ face type works (B-spline faces are what the method is for).  Planning:
    centres solved on the surface offset by the ball radius; a theoretical contact
    point outside the trimmed face refuses its guide point;
 3. each guide point's moves (down from the *safe height* above the patch, the touches,
-   up again) pass the collision check on their own (:func:`check_program`), else the
-   guide point is refused with the check's message (which part of the stylus, which
-   face); refused guide points are reported, never dropped silently;
+   up again) pass the collision check on their own: the fast conservative check of all
+   guide points at once (:func:`probegen.planning.heightmap.clear_paths`), then the exact
+   one (:func:`check_program`) for those it is unsure of, which refuses the guide point
+   with its message (which part of the stylus, which face); refused guide points are
+   reported, never dropped silently;
 4. travel between guide points at the safe height (the face's highest point + ball
    radius + approach + the machine margin, at most the clearance plane), each such move
    checked, else by the clearance plane.
@@ -21,6 +23,7 @@ The part is set up by its work offset (no locating, no run-time variables).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +35,7 @@ from probegen.errors import CollisionError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import Obstacle, check_program, load_model, obstacle_for
 from probegen.planning.freeform import PlannedTouch, group_nodes, plan_touches
+from probegen.planning.heightmap import clear_paths
 from probegen.spec import FreeformSpec
 
 Vec3 = tuple[float, float, float]
@@ -96,7 +100,7 @@ def resolve_face(feature: FreeformSpec, model: Any) -> int:
 
 
 def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: MachineProfile,
-                  setup: ir.Setup, *, check: bool = True) -> FreeformPlan:
+                  setup: ir.Setup, *, check: bool = True, fast: bool = True) -> FreeformPlan:
     """Plan one free-form feature (see the module docstring).
 
     Args:
@@ -105,6 +109,8 @@ def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: Machi
         machine: the machine profile (probe, margin).
         setup: the program's setup (ball, clearance plane) for the collision checks.
         check: check each guide point and each link (False: plan only, for speed).
+        fast: try the fast conservative check first (False: the exact check alone, the
+            baseline of the benchmark; the plan is the same either way).
 
     Raises:
         SpecError: no model.
@@ -140,10 +146,12 @@ def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: Machi
     obstacle = obstacle_for(model_path, [])
     paths: list[tuple[ir.Node, ...]] = []
     kept: list[list[PlannedTouch]] = []
-    for grp in groups:
-        nodes = group_nodes(feature.id, grp, r=r, approach=approach,
-                            overtravel=machine.probe.overtravel, safe_z=safe_z)
-        why = _collides(nodes, obstacle, setup, machine) if check else None
+    every = [group_nodes(feature.id, grp, r=r, approach=approach,
+                         overtravel=machine.probe.overtravel, safe_z=safe_z)
+             for grp in groups]
+    cleared = _fast(every, obstacle, setup, machine, check, fast)
+    for grp, nodes, ok in zip(groups, every, cleared, strict=True):
+        why = None if ok else _collides(nodes, obstacle, setup, machine)
         if why is None:
             paths.append(nodes)
             kept.append(grp)
@@ -155,7 +163,7 @@ def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: Machi
         raise PlanningError(f"{feature.where}: no guide point of face {face} can be "
                             f"measured ({len(left)} left out; {reasons})")
     definition = ir.FreeformDef(feature.id, face, feature.method, len(kept))
-    body = _link(paths, obstacle, setup, machine, safe_z, check)
+    body = _link(paths, obstacle, setup, machine, check, fast)
     guides = tuple((grp[0].guide, by_guide[grp[0].guide].point,
                     by_guide[grp[0].guide].normal) for grp in kept)
     return FreeformPlan(feature, face, guides, tuple(t for grp in kept for t in grp),
@@ -204,8 +212,18 @@ def _collides(nodes: tuple[ir.Node, ...], obstacle: Obstacle, setup: ir.Setup,
     return None
 
 
+def _fast(paths: Sequence[Sequence[ir.Node]], obstacle: Obstacle, setup: ir.Setup,
+          machine: MachineProfile, check: bool, fast: bool) -> list[bool]:
+    """Per path: cleared without the exact check (unchecked, or by the fast check)."""
+    if not check:
+        return [True] * len(paths)
+    if not fast:
+        return [False] * len(paths)
+    return [bool(x) for x in clear_paths(paths, obstacle, setup, machine)]
+
+
 def _link(paths: list[tuple[ir.Node, ...]], obstacle: Obstacle, setup: ir.Setup,
-          machine: MachineProfile, safe_z: float, check: bool) -> list[ir.Node]:
+          machine: MachineProfile, check: bool, fast: bool) -> list[ir.Node]:
     """The feature's nodes: a rapid above the first group, the groups joined at the safe
     height (or by the clearance plane where that move is not clear), a rapid up."""
     clear = setup.clearance_z
@@ -216,11 +234,15 @@ def _link(paths: list[tuple[ir.Node, ...]], obstacle: Obstacle, setup: ir.Setup,
 
     first = target(paths[0][0])
     body: list[ir.Node] = [ir.Move((first[0], first[1], clear), ir.MoveMode.RAPID)]
+    hops = [(ir.Move(target(before[-1]), ir.MoveMode.PROTECTED),
+             ir.Move(target(after[0]), ir.MoveMode.PROTECTED))
+            for before, after in zip(paths[:-1], paths[1:], strict=True)]
+    cleared = _fast(hops, obstacle, setup, machine, check, fast)
     for k, path in enumerate(paths):
         if k:
             a, b = target(paths[k - 1][-1]), target(path[0])
-            hop = (ir.Move(a, ir.MoveMode.PROTECTED), ir.Move(b, ir.MoveMode.PROTECTED))
-            if check and _collides(hop, obstacle, setup, machine) is not None:
+            if not cleared[k - 1] and _collides(hops[k - 1], obstacle, setup,
+                                                 machine) is not None:
                 body += [ir.Move((a[0], a[1], clear), ir.MoveMode.RAPID),
                          ir.Move((b[0], b[1], clear), ir.MoveMode.RAPID)]
         body += path

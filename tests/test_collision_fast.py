@@ -1,0 +1,200 @@
+"""The fast collision check (planning.heightmap): never clears what the exact check rejects."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import REPO
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from probegen import ir
+from probegen.errors import CollisionError, PlanningError
+from probegen.planning import make_setup
+from probegen.planning.collision import MeshObstacle, check_program, obstacle_for
+from probegen.planning.freeform_spec import plan_freeform
+from probegen.planning.heightmap import clear_paths, height_map
+from probegen.spec import FreeformSpec, Spec, load_spec
+
+SAMPLE = REPO / "samples/freeform/freeform.step"
+NIST_CTC5 = REPO.parent / "shared/ref/nist-step/nist_ctc_05_asme1_rd.stp"
+SPEC = load_spec(REPO / "samples/freeform/freeform.toml")
+SETUP = make_setup(SPEC)
+MACHINE = SPEC.machine
+R = MACHINE.probe.ball_radius
+
+
+def _exact_clears(path: tuple[ir.Node, ...], obstacle: Any) -> bool:
+    """The exact check alone: on a copy of the obstacle whose sweep cache holds none of
+    the fast check's entries."""
+    obstacle = MeshObstacle(obstacle.mesh, obstacle.face_ids)
+    try:
+        check_program(ir.Program(SETUP, path), obstacle, [], MACHINE)
+    except (CollisionError, PlanningError):
+        return False
+    return True
+
+
+class Near:
+    """Surface samples of one model (or one face of it): points and outward normals."""
+
+    def __init__(self, path: Path, face: int | None) -> None:
+        obstacle = obstacle_for(path, [])
+        assert isinstance(obstacle, MeshObstacle)
+        self.obstacle = obstacle
+        mesh = obstacle.mesh
+        if face is not None:
+            keep = np.asarray(obstacle.face_ids) == face
+            mesh = mesh.submesh([np.flatnonzero(keep)], append=True)
+        points, tri = trimesh.sample.sample_surface(mesh, 2000, seed=7)
+        self.points, self.normals = points, mesh.face_normals[tri]
+
+    def move(self, k: int, off: float, d: tuple[float, float, float], length: float,
+             vertical: bool) -> tuple[ir.Node, ...]:
+        """A move starting ``R + off`` off sample ``k`` along its normal, ``length`` mm
+        along ``d`` (or straight down)."""
+        a = self.points[k % len(self.points)] + (R + off) * self.normals[k % len(self.points)]
+        u = np.array([0.0, 0.0, -1.0]) if vertical else np.asarray(d) / max(
+            float(np.linalg.norm(d)), 1e-9)
+        b = a + length * u
+        return (ir.Move(_t(a), ir.MoveMode.PROTECTED), ir.Move(_t(b), ir.MoveMode.PROTECTED))
+
+    def touch(self, k: int, approach: float, tilt: tuple[float, float, float],
+              depth: float) -> tuple[ir.Node, ...]:
+        """Down from above, a touch along a direction tilted from the normal by ``tilt``
+        whose contact is ``depth`` mm off the sample (negative: into the part), back."""
+        p, n = self.points[k % len(self.points)], self.normals[k % len(self.points)]
+        d = n + np.asarray(tilt)
+        d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else n
+        contact = p + depth * n
+        start = contact + (R + approach) * d
+        touch = ir.Touch("F", 10, ir.TouchRole.MEASURE, _t(contact), _t(d), approach, 2.0,
+                         surface=_t(n) if np.dot(n, d) < 1.0 - 1e-12 else None)
+        return (ir.Move((float(start[0]), float(start[1]), float(start[2]) + 20.0),
+                        ir.MoveMode.PROTECTED),
+                ir.Move(_t(start), ir.MoveMode.PROTECTED), touch,
+                ir.Move(_t(start), ir.MoveMode.RETRACT))
+
+
+def _t(v: np.ndarray) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+@pytest.fixture(scope="module")
+def sample() -> Near:
+    return Near(SAMPLE, None)
+
+
+@pytest.fixture(scope="module")
+def nist() -> Near:
+    if not NIST_CTC5.exists():
+        pytest.skip("NIST CTC 5 model not available")
+    return Near(NIST_CTC5, 17)
+
+
+_unit = st.floats(-1.0, 1.0)
+_FAST = settings(max_examples=60, deadline=None,
+                 suppress_health_check=[HealthCheck.too_slow,
+                                        HealthCheck.function_scoped_fixture])
+
+
+def _agree(near: Near, paths: list[tuple[ir.Node, ...]]) -> None:
+    fast = clear_paths(paths, near.obstacle, SETUP, MACHINE)
+    for path, ok in zip(paths, fast, strict=True):
+        if ok:
+            assert _exact_clears(path, near.obstacle), path
+
+
+@_FAST
+@given(k=st.integers(0, 1999), off=st.floats(-0.5, 6.0), d=st.tuples(_unit, _unit, _unit),
+       length=st.floats(0.0, 12.0), vertical=st.booleans())
+def test_fast_never_clears_a_move_the_exact_check_rejects_sample(
+        sample: Near, k: int, off: float, d: tuple[float, float, float], length: float,
+        vertical: bool) -> None:
+    _agree(sample, [sample.move(k, off, d, length, vertical)])
+
+
+@_FAST
+@given(k=st.integers(0, 1999), approach=st.floats(0.3, 4.0),
+       tilt=st.tuples(_unit, _unit, _unit).map(lambda t: tuple(0.6 * x for x in t)),
+       depth=st.floats(-0.02, 0.3))
+def test_fast_never_clears_a_touch_the_exact_check_rejects_sample(
+        sample: Near, k: int, approach: float, tilt: tuple[float, float, float],
+        depth: float) -> None:
+    _agree(sample, [sample.touch(k, approach, tilt, depth)])  # type: ignore[arg-type]
+
+
+@_FAST
+@given(k=st.integers(0, 1999), off=st.floats(-0.5, 6.0), d=st.tuples(_unit, _unit, _unit),
+       length=st.floats(0.0, 12.0), vertical=st.booleans(), approach=st.floats(0.3, 4.0),
+       depth=st.floats(-0.02, 0.3))
+def test_fast_never_clears_what_the_exact_check_rejects_nist_bspline_face(
+        nist: Near, k: int, off: float, d: tuple[float, float, float], length: float,
+        vertical: bool, approach: float, depth: float) -> None:
+    _agree(nist, [nist.move(k, off, d, length, vertical),
+                  nist.touch(k, approach, (0.0, 0.0, 0.0), depth)])
+
+
+@pytest.mark.parametrize("kind", ["move", "touch"])
+def test_the_random_paths_reach_both_answers(sample: Near, kind: str) -> None:
+    """Not vacuous: among fixed random moves (touches) near the part the fast check
+    clears many, the exact check rejects many, and every path the fast check clears
+    the exact one clears too."""
+    rng = np.random.default_rng(3)
+    paths = [sample.move(int(rng.integers(2000)), float(rng.uniform(-0.5, 4.0)),
+                         tuple(rng.normal(size=3)), float(rng.uniform(0.0, 8.0)),
+                         bool(rng.integers(2))) if kind == "move"
+             else sample.touch(int(rng.integers(2000)), float(rng.uniform(0.3, 4.0)),
+                               tuple(0.3 * rng.uniform(-1.0, 1.0, 3)),
+                               float(rng.uniform(-0.02, 0.3)))
+             for _ in range(120)]
+    fast = clear_paths(paths, sample.obstacle, SETUP, MACHINE)
+    exact = np.array([_exact_clears(p, sample.obstacle) for p in paths])
+    assert not np.any(fast & ~exact)
+    assert fast.sum() > 20 and (~exact).sum() > 10
+
+
+def test_height_map_bounds_the_mesh(sample: Near) -> None:
+    hmap = height_map(sample.obstacle)
+    pts, _ = trimesh.sample.sample_surface(sample.obstacle.mesh, 100_000, seed=2)
+    at = hmap.highest_along(pts, pts, 0.0)
+    assert np.all(at >= pts[:, 2])
+    rng = np.random.default_rng(1)
+    q = np.c_[rng.uniform(-5.0, 65.0, 200), rng.uniform(-5.0, 45.0, 200)]
+    near = hmap.highest_along(q, q, 3.3)
+    for x, h in zip(q, near, strict=True):
+        inside = np.hypot(*(pts[:, :2] - x).T) <= 3.3
+        assert not inside.any() or pts[inside, 2].max() <= h
+
+
+def _feature(**changes: Any) -> tuple[FreeformSpec, Spec]:
+    f = SPEC.features[0]
+    assert isinstance(f, FreeformSpec)
+    return dataclasses.replace(f, **changes), SPEC
+
+
+@pytest.mark.parametrize("method", ["vector", "vertical", "vertical2d", "microplane"])
+def test_fast_and_exact_plans_are_the_same(method: str) -> None:
+    f, spec = _feature(counts=(9, 7), margin=1.0, method=method)
+    sweeps = obstacle_for(SAMPLE, []).sweeps
+    sweeps.clear()  # the exact check alone: no segment cleared by the fast check cached
+    exact = plan_freeform(f, spec.model, MACHINE, SETUP, fast=False)
+    sweeps.clear()
+    quick = plan_freeform(f, spec.model, MACHINE, SETUP)
+    assert quick.nodes == exact.nodes and quick.left_out == exact.left_out
+    assert len(quick.guides) > 40
+
+
+def test_unsure_paths_go_to_the_exact_check() -> None:
+    """A path the fast check cannot read (a touch not starting at its approach point) is
+    unsure, and the exact check refuses it with its own message."""
+    near = Near(SAMPLE, None)
+    path = near.touch(5, 2.0, (0.0, 0.0, 0.0), 0.0)
+    bad = (path[0], ir.Move((0.0, 0.0, 40.0), ir.MoveMode.PROTECTED), *path[2:])
+    assert not clear_paths([bad], near.obstacle, SETUP, MACHINE)[0]
+    assert not _exact_clears(bad, near.obstacle)
