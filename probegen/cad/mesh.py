@@ -1,0 +1,71 @@
+"""Tessellation of a loaded model into a triangle mesh for the collision check.
+
+Owns :func:`tessellate`: OCCT's incremental mesher at a given chordal tolerance, each
+face's triangles located and wound outwards, merged into one ``trimesh`` mesh that
+records, per triangle, the id of the face it came from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from OCP.BRep import BRep_Tool
+from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.BRepTools import BRepTools
+from OCP.TopAbs import TopAbs_Orientation
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS_Face
+
+from probegen.cad.faces import Model, _xyz
+from probegen.errors import ModelError
+
+
+def tessellate(model: Model, tolerance: float = 0.01) -> trimesh.Trimesh:
+    """Triangulate the model for collision checks.
+
+    Any earlier triangulation is discarded first, so the mesh depends on ``tolerance``
+    alone.  Triangles are wound so that their normals point out of the part.
+
+    Args:
+        model: the loaded model.
+        tolerance: largest chordal deviation from the exact surface, mm.
+
+    Returns:
+        The mesh in mm, vertices along face borders merged and degenerate triangles
+        dropped, so that a closed solid gives a watertight mesh.  ``metadata["face_ids"]``
+        holds, for each triangle, the id of the model face it came from.
+    """
+    shape = model._shape.wrapped
+    BRepTools.Clean_s(shape)
+    BRepMesh_IncrementalMesh(shape, tolerance, False, 0.5, False)
+    vertices: list[np.ndarray] = []
+    triangles: list[np.ndarray] = []
+    ids: list[np.ndarray] = []
+    for record, face in zip(model.faces, model._topo_faces, strict=True):
+        nodes, tris = _face_mesh(face)
+        triangles.append(tris + sum(len(v) for v in vertices))
+        vertices.append(nodes)
+        ids.append(np.full(len(tris), record.id, dtype=np.int64))
+    mesh = trimesh.Trimesh(np.concatenate(vertices), np.concatenate(triangles), process=True)
+    face_ids = np.concatenate(ids)
+    if len(face_ids) != len(mesh.faces):
+        raise ModelError(f"{model.path}: tessellation lost triangles while merging vertices")
+    keep = mesh.nondegenerate_faces()  # slivers at sphere poles, cone apexes
+    mesh.update_faces(keep)
+    mesh.remove_unreferenced_vertices()
+    mesh.metadata["face_ids"] = face_ids[keep]
+    return mesh
+
+
+def _face_mesh(face: TopoDS_Face) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes (n, 3) float and triangles (m, 3) int of one meshed face, located."""
+    location = TopLoc_Location()
+    poly = BRep_Tool.Triangulation_s(face, location)
+    if poly is None:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    trsf = location.Transformation()
+    nodes = [_xyz(poly.Node(i).Transformed(trsf)) for i in range(1, poly.NbNodes() + 1)]
+    tris = np.array([poly.Triangle(i).Get() for i in range(1, poly.NbTriangles() + 1)]) - 1
+    if face.Orientation() == TopAbs_Orientation.TopAbs_REVERSED:
+        tris = tris[:, [0, 2, 1]]
+    return np.array(nodes).reshape(-1, 3), tris.reshape(-1, 3).astype(np.int64)
