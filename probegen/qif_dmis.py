@@ -13,6 +13,8 @@ CIRCLE     CircleFeatureMeasurement          Location, Normal, Diameter
 SPHERE     SphereFeatureMeasurement          Location, Diameter
 CYLNDR     CylinderFeatureMeasurement        Axis (point, direction), Diameter, Length
 CONE       ConeFeatureMeasurement            Axis (apex, direction), FullAngle (degrees)
+TORUS      TorusFeatureMeasurement           Location, AxisVector, MinorDiameter,
+                                             MajorDiameter
 =========  ================================  =========================================
 
 The ``PTMEAS`` points echoed inside a ``MEAS`` block become the feature's
@@ -53,7 +55,8 @@ STANDARD = ("ANSI", "ANSI/DMIS 105.2", "Dimensional Measuring Interface Standard
 """The formal standard of characteristics read from DMIS tolerances."""
 
 FEATURE_TAGS = {"POINT": "Point", "PLANE": "Plane", "LINE": "Line", "CIRCLE": "Circle",
-                "SPHERE": "Sphere", "CYLNDR": "Cylinder", "CONE": "Cone"}
+                "SPHERE": "Sphere", "CYLNDR": "Cylinder", "CONE": "Cone",
+                "TORUS": "Torus"}
 """DMIS feature type -> QIF feature stem (``<stem>FeatureMeasurement``)."""
 
 FORM_TOLERANCES = {"FLAT": ("Flatness", "PLANE"), "CIRLTY": ("Circularity", "CIRCLE"),
@@ -210,6 +213,12 @@ def _point_set(b: QifBuilder, points: list[MeasuredPoint]) -> int:
 
 def _geometry(element: ET.Element, f: FeatureActual) -> None:
     """The type-specific children of a feature measurement, in schema order."""
+    if f.type == "TORUS":
+        sub(element, "Location", vec(f.position))
+        sub(element, "AxisVector", vec(f.direction or (0.0, 0.0, 1.0)))
+        _optional(element, "MinorDiameter", f.minor_diameter)
+        _optional(element, "MajorDiameter", f.diameter)
+        return
     if f.type in ("CYLNDR", "CONE"):
         axis = sub(element, "Axis")
         sub(axis, "AxisPoint", vec(f.position))
@@ -266,7 +275,7 @@ def _check(ta: ToleranceActual, feature: FeatureActual | None,
     """The characteristic of a tolerance actual and its definition."""
     verdict = "PASS" if ta.intol else "FAIL"
     if ta.kind == "DIAM":
-        if feature is None or feature.diameter is None:
+        if feature is None or feature.diameter is None or feature.type == "TORUS":
             raise _Unmapped("DIAM needs the actual diameter of a CIRCLE, SPHERE or CYLNDR "
                             "written before it")
         kind = "SphericalDiameter" if feature.type == "SPHERE" else "Diameter"

@@ -97,6 +97,12 @@ FEATURES = [
     ),
     ("FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,12.5", {"diameter": 12.5, "length": None}),
     ("FEAT/CONE,OUTER,CART,0,0,10,0,0,1,60", {"position": (0, 0, 10), "angle": 60}),
+    (
+        "FEAT/TORUS,OUTER,CART,25,25,26,0,0,1,38,8",
+        {"material": "OUTER", "position": (25, 25, 26), "direction": (0, 0, 1),
+         "diameter": 38, "minor_diameter": 8, "length": None},
+    ),
+    ("FEAT/TORUS,INNER,POL,10,90,5,0,0,-1,20,4", {"position": (0, 10, 5), "material": "INNER"}),
     ("FEAT/CIRCLE,INNER,POL,10,90,5,0,0,1,4", {"position": (0, 10, 5)}),
     ("feat/circle,inner,cart,1,2,3,0,0,1,4", {"type": "CIRCLE", "position": (1, 2, 3)}),
 ]
@@ -207,10 +213,26 @@ BAD = [
         "FA(X)=FEAT: expected CART, POL, INNER or OUTER, found the word 'INNR'",
     ),
     (
-        "FA(X)=FEAT/TORUS,INNER,CART,0,0,0,0,0,1,5,1",
+        "FA(X)=FEAT/ELLIPS,INNER,CART,0,0,0,0,0,1,5,1",
         12,
-        "FA(X)=FEAT: expected a feature type (POINT, PLANE, LINE, CIRCLE, SPHERE, CYLNDR or "
-        "CONE), found the word 'TORUS'",
+        "FA(X)=FEAT: expected a feature type (POINT, PLANE, LINE, CIRCLE, SPHERE, CYLNDR, "
+        "CONE or TORUS), found the word 'ELLIPS'",
+    ),
+    (
+        "FA(X)=FEAT/TORUS,OUTER,CART,0,0,0,0,0,1,38",
+        29,
+        "FA(X)=FEAT: expected 8 (position, direction, diameter, minor_diameter) numbers for "
+        "TORUS, found 7",
+    ),
+    (
+        "FA(X)=FEAT/TORUS,OUTER,CART,0,0,0,0,0,1,38,0",
+        44,
+        "FA(X)=FEAT: expected a minor diameter above 0, found the number 0",
+    ),
+    (
+        "FA(X)=FEAT/TORUS,CART,0,0,0,0,0,1,38,8",
+        23,
+        "FA(X)=FEAT: expected INNER or OUTER, found the number 0",
     ),
     (
         "FA(X)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,0,5",
@@ -391,6 +413,8 @@ SEED_OUTPUT = (
     "  0,0,1,0.5,1.0 $$ actual\n"
     "FA(TOP)=FEAT/PLANE,POL,3,0.5,1,0,0,1\n"
     "TA(DIA)=TOL/DIAM,0.0004,INTOL\n"
+    "FA(RIM)=FEAT/TORUS,OUTER,CART,0.98,1.02,1.0236,$\n"
+    "  0,0,1,1.496,0.315\n"
     "MEAS/CIRCLE,F(RING),2\n"
     "PTMEAS/CART,2,0,0.5,-1,0,0\n"
     "PTMEAS/POL,2,1.5,0.5\n"

@@ -204,11 +204,11 @@ ENDFIL
 """
 
 
-TORUS = "F(T1)=FEAT/TORUS,OUTER,CART,0,0,0,0,0,1,20,5"
+ELLIPSE = "F(T1)=FEAT/ELLIPS,INNER,CART,0,0,0,0,0,1,20,10,1,0,0"
 
 
 def test_unsupported_statement_names_its_line(machine) -> None:  # type: ignore[no-untyped-def]
-    text = PROGRAM.format(ball=4.0, extra=TORUS)
+    text = PROGRAM.format(ball=4.0, extra=ELLIPSE)
     with pytest.raises(UnsupportedError, match=r"<t>:9: cannot post-process FEAT"):
         post_dmis(parse_dmis(text, source="<t>"), machine)
     out = post_dmis(parse_dmis(text, source="<t>"), machine, skip_unsupported=True)
@@ -354,15 +354,15 @@ def test_linuxcnc_post_runs_in_rs274(case: Case, rs274: str,  # noqa: F811
 
 
 def test_cli_lists_skipped_statements(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    program = tmp_path / "torus.dmi"
-    program.write_text(PROGRAM.format(ball=4.0, extra=TORUS))
+    program = tmp_path / "ellipse.dmi"
+    program.write_text(PROGRAM.format(ball=4.0, extra=ELLIPSE))
     args = ["post", str(program), "--machine", str(MACHINE), "--model", str(SIMPLE.model),
-            "-o", str(tmp_path / "torus.nc")]
+            "-o", str(tmp_path / "ellipse.nc")]
     assert main(args) == ExitCode.UNSUPPORTED
     assert f"{program}:9: cannot post-process FEAT" in capsys.readouterr().err
     assert main([*args, "--skip-unsupported"]) == ExitCode.OK
-    assert f"probegen: skipped {program}:9: F(T1)=FEAT/TORUS" in capsys.readouterr().err
-    assert "(L9 SKIPPED F T1 =FEAT/TORUS," in (tmp_path / "torus.nc").read_text()
+    assert f"probegen: skipped {program}:9: F(T1)=FEAT/ELLIPS" in capsys.readouterr().err
+    assert "(L9 SKIPPED F T1 =FEAT/ELLIPS," in (tmp_path / "ellipse.nc").read_text()
     assert main(["post", str(program), "--machine", str(MACHINE), "--model",
                  str(SIMPLE.model), "-d", "dmis", "-o", str(tmp_path)]) == ExitCode.UNSUPPORTED
 
@@ -426,8 +426,8 @@ BALL_PROGRAM = """DMISMN/'THROUGH'
 UNITS/MM,ANGDEC
 GOTO/-30,0,0
 GOTO/30,0,0
-F(T1)=FEAT/TORUS,OUTER,CART,0,0,0,0,0,1,20,5
-MEAS/TORUS,F(T1),1
+F(T1)=FEAT/ELLIPS,INNER,CART,0,0,0,0,0,1,20,10,1,0,0
+MEAS/ELLIPS,F(T1),1
 PTMEAS/CART,25,0,0,1,0,0
 ENDMES
 ENDFIL

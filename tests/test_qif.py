@@ -240,6 +240,8 @@ FA(PT1) = FEAT/POINT, CART, 1, 1, 1
 TA(PAR) = TOL/PARLEL, 0.01, INTOL
 FA(CY1) = FEAT/CYLNDR, INNER, CART, 0, 0, 0, 0, 0, 1, 8
 TA(CC1) = TOL/CYLCTY, 0.002, INTOL
+FA(T1) = FEAT/TORUS, OUTER, CART, 0, 0, 1, 0, 0, 1, 1.5, 0.25
+TA(D3) = TOL/DIAM, 0.001, INTOL
 """
 EVERY_TOLERANCE = """\
 UNITS/INCH
@@ -249,6 +251,7 @@ T(F1) = TOL/FLAT, 0.001
 T(D2) = TOL/DIAM, -0.0001, 0.0001
 T(P1) = TOL/POS, 3D, 0.0002, MMC
 T(CC1) = TOL/CIRLTY, 0.001
+T(D3) = TOL/DIAM, -0.002, 0.002
 """
 
 
@@ -261,14 +264,16 @@ def test_every_feature_type_and_the_notes(schema: Path) -> None:
     validate_qif(export.text, schema=schema)
     assert [n.split(":")[0] for n in export.notes] == [
         "TA(EARLY)=TOL/DIAM (line 2)", "TA(F1)=TOL/FLAT (line 10)",
-        "TA(PAR)=TOL/PARLEL (line 17)", "TA(CC1)=TOL/CYLCTY (line 19)"]
+        "TA(PAR)=TOL/PARLEL (line 17)", "TA(CC1)=TOL/CYLCTY (line 19)",
+        "TA(D3)=TOL/DIAM (line 21)"]
     assert "applies to a PLANE, the feature before it is the CIRCLE C1" in export.notes[1]
     assert "defines a CIRLTY tolerance, not CYLCTY" in export.notes[3]
     root = _root(export.text)
     kinds = [m.tag.split("}")[1] for m in root.findall(".//q:MeasuredFeatures/*", NS)]
     assert kinds == ["CircleFeatureMeasurement", "SphereFeatureMeasurement",
                      "ConeFeatureMeasurement", "LineFeatureMeasurement",
-                     "PointFeatureMeasurement", "CylinderFeatureMeasurement"]
+                     "PointFeatureMeasurement", "CylinderFeatureMeasurement",
+                     "TorusFeatureMeasurement"]
     assert _statuses(root) == {"D1": "FAIL", "D2": "PASS", "P1": "PASS"}
     assert root.findtext(".//q:InspectionStatusEnum", namespaces=NS) == "FAIL"
     assert root.find(".//q:SphericalDiameterCharacteristicMeasurement", NS) is not None
@@ -279,6 +284,12 @@ def test_every_feature_type_and_the_notes(schema: Path) -> None:
     assert line is not None and _floats(line.find("q:Length", NS)) == [10.0]
     cone = root.find(".//q:ConeFeatureMeasurement/q:FullAngle", NS)
     assert _floats(cone) == [60.0]
+    torus = root.find(".//q:TorusFeatureMeasurement", NS)
+    assert torus is not None
+    assert [child.tag.split("}")[1] for child in torus][-4:] == [
+        "Location", "AxisVector", "MinorDiameter", "MajorDiameter"]
+    assert _floats(torus.find("q:MinorDiameter", NS)) == [0.25]
+    assert _floats(torus.find("q:MajorDiameter", NS)) == [1.5]
 
 
 # ----------------------------------------------------------------------------- validation

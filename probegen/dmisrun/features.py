@@ -11,16 +11,20 @@ centres the CMM recorded.  Stylus compensation, two modes:
   ball centres, then offset it by the ball radius away from the side the probe came
   from (the PTMEAS vectors): a plane moves by ``r`` against its outward normal, an
   INNER circle/cylinder/sphere grows by ``r``, an OUTER one shrinks, a cone's apex
-  moves ``r / sin(half angle)`` along its axis.  Exact for any tilt of the real part.
+  moves ``r / sin(half angle)`` along its axis, a torus's tube grows by ``r`` (INNER:
+  the air is inside the tube) or shrinks (OUTER), its centre and major diameter stay.
+  Exact for any tilt of the real part.
 * ``"vector"``: compensate each ball centre by ``r`` along its PTMEAS vector (the
   nominal surface normal) and fit those points; exact only where the real surface
   normal equals the nominal one (an error of ``r (1 - cos t)`` for a tilt ``t``).
 
 Points and lines are always vector compensated.  Cylinders are fitted from the
 nominal axis (:mod:`probegen.dmisrun.fitting`: sparse CMM patterns fit several
-cylinders exactly); the other shapes use :mod:`probegen.geometry.fits` as they are.
+cylinders exactly), tori with the nominal axis as one more start
+(:func:`~probegen.geometry.fits.fit_torus`); the other shapes use
+:mod:`probegen.geometry.fits` as they are.
 
-The actual's reported location: the fitted centre for circles and spheres, the apex
+The actual's reported location: the fitted centre for circles, spheres and tori, the apex
 for cones, and for unbounded features (plane, cylinder axis, line) the nominal
 location projected onto the actual feature, so actual and nominal values compare
 directly.  A cylinder keeps its nominal length (the points of a bore do not determine
@@ -43,16 +47,17 @@ from probegen.geometry.fits import (
     fit_line_3d,
     fit_plane,
     fit_sphere,
+    fit_torus,
 )
 from probegen.geometry.frames import FloatArray, unit
 
 Vec3 = tuple[float, float, float]
 Compensation = Literal["feature", "vector"]
 
-KINDS = ("POINT", "PLANE", "CIRCLE", "CYLNDR", "SPHERE", "CONE", "LINE")
+KINDS = ("POINT", "PLANE", "CIRCLE", "CYLNDR", "SPHERE", "CONE", "TORUS", "LINE")
 """Feature types the virtual CMM defines, measures and reports."""
 
-SIDED = frozenset({"CIRCLE", "CYLNDR", "SPHERE", "CONE"})
+SIDED = frozenset({"CIRCLE", "CYLNDR", "SPHERE", "CONE", "TORUS"})
 """Types written with INNER|OUTER."""
 
 
@@ -63,16 +68,21 @@ class DmisFeature:
     Attributes:
         name: the label name (``C1`` for ``F(C1)``/``FA(C1)``).
         kind: one of :data:`KINDS`.
-        qualifier: ``INNER``/``OUTER`` (circle, cylinder, sphere, cone), ``BND``/``UNBND``
-            (line), None otherwise.
-        location: point, centre, apex (cone), axis point or line start.
+        qualifier: ``INNER``/``OUTER`` (circle, cylinder, sphere, cone, torus),
+            ``BND``/``UNBND`` (line), None otherwise.  A torus is INNER when the air is
+            inside its tube (a concave fillet), OUTER when the material is.
+        location: point, centre (circle, sphere, torus), apex (cone), axis point or line
+            start.
         vector: unit normal, axis or direction; None for a sphere written without one.
-        size: diameter (circle, cylinder, sphere) or included angle in degrees (cone).
+        size: diameter (circle, cylinder, sphere), major diameter (torus: twice the
+            radius of the tube's centre circle) or included angle in degrees (cone).
+        minor: torus only: the tube (minor) diameter.
         length: cylinder length, None if not given.
         end: end point of a bounded line.
         normal: the line's plane normal (``LINE`` with a third vector).
         form: actual only: flatness, roundness, cylindricity, sphericity, conicity or
-            straightness from the fit residuals.
+            straightness from the fit residuals (a torus: the fit's ``max - min``
+            residual).
         points: actual only: the compensated contact points, ``(n, 3)`` as tuples.
     """
 
@@ -82,6 +92,7 @@ class DmisFeature:
     location: Vec3
     vector: Vec3 | None
     size: float | None = None
+    minor: float | None = None
     length: float | None = None
     end: Vec3 | None = None
     normal: Vec3 | None = None
@@ -111,7 +122,7 @@ def signed_like(direction: FloatArray, reference: Vec3 | None) -> FloatArray:
 
 _COUNTS = {
     "POINT": (6,), "PLANE": (6,), "CIRCLE": (7,), "CYLNDR": (7, 8), "SPHERE": (4, 7),
-    "CONE": (7,), "LINE": (6, 9),
+    "CONE": (7,), "TORUS": (8,), "LINE": (6, 9),
 }
 """Numbers after ``CART`` each type takes (alternatives)."""
 
@@ -148,6 +159,9 @@ def parse_nominal(name: str, kind: str, qualifier: str | None,
         normal = vec3(unit(v[6:9], what="line normal")) if len(v) == 9 else None
         return DmisFeature(name, kind, qualifier, loc, vector, normal=normal)
     size = _nominal_size(kind, v, scale)
+    if kind == "TORUS":
+        return DmisFeature(name, kind, qualifier, loc, vector, size=size,
+                           minor=float(v[7]) * scale)
     length = float(v[7]) * scale if kind == "CYLNDR" and len(v) == 8 else None
     return DmisFeature(name, kind, qualifier, loc, vector, size=size, length=length)
 
@@ -155,7 +169,7 @@ def parse_nominal(name: str, kind: str, qualifier: str | None,
 def _nominal_size(kind: str, v: FloatArray, scale: float) -> float | None:
     if kind == "CONE":
         return float(v[6])  # included angle, degrees: no unit scale
-    if kind in ("CIRCLE", "CYLNDR"):
+    if kind in ("CIRCLE", "CYLNDR", "TORUS"):
         return float(v[6]) * scale
     return None
 
@@ -167,7 +181,7 @@ def _counts_text(kind: str) -> str:
 # ------------------------------------------------------------------------ measuring
 
 MINIMUM_POINTS = {"POINT": 1, "PLANE": 3, "CIRCLE": 3, "CYLNDR": 5, "SPHERE": 4, "CONE": 6,
-                  "LINE": 2}
+                  "TORUS": 7, "LINE": 2}
 """Fewest points each measured type needs (those of the least-squares fits)."""
 
 
@@ -222,7 +236,7 @@ def _fit_plane(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
 
 
 def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) -> DmisFeature:
-    """Circle, cylinder, sphere or cone through ball centres, offset by ``radius``."""
+    """Circle, cylinder, sphere, cone or torus through ball centres, offset by ``radius``."""
     grow = radius if nominal.qualifier == "INNER" else -radius
     if nominal.kind == "CIRCLE":
         circle = fit_circle_3d(centres)
@@ -235,6 +249,8 @@ def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) 
                        form=sphere.form)
     if nominal.kind == "CYLNDR":
         return _fit_cylinder(nominal, centres, grow)
+    if nominal.kind == "TORUS":
+        return _fit_torus(nominal, centres, grow)
     return _fit_cone(nominal, centres, grow)
 
 
@@ -264,6 +280,16 @@ def _fit_cone(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFea
     return replace(nominal, location=vec3(apex),
                    vector=vec3(signed_like(opening, nominal.vector)),
                    size=math.degrees(2.0 * cone.half_angle), form=cone.form)
+
+
+def _fit_torus(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
+    """Torus through ball centres, started from the nominal axis as well; the ball
+    centres lie on a torus with the same centre circle and the tube ``-grow`` larger."""
+    torus = fit_torus(centres, axis=nominal.vector)
+    return replace(nominal, location=torus.centre,
+                   vector=vec3(signed_like(arr(torus.axis), nominal.vector)),
+                   size=2.0 * torus.major_radius, minor=2.0 * (torus.minor_radius + grow),
+                   form=torus.form)
 
 
 def _fit_line(nominal: DmisFeature, points: FloatArray) -> DmisFeature:

@@ -9,6 +9,7 @@ coordinates (:class:`~probegen.dmisrun.features.DmisFeature`).  Forms executed::
     F(x)=FEAT/CYLNDR,INNER|OUTER,CART,x,y,z,i,j,k,diam[,length]
     F(x)=FEAT/SPHERE,INNER|OUTER,CART,x,y,z[,i,j,k],diam
     F(x)=FEAT/CONE,INNER|OUTER,CART,x,y,z,i,j,k,angle      (apex, axis, included angle)
+    F(x)=FEAT/TORUS,INNER|OUTER,CART,x,y,z,i,j,k,major,minor  (centre, axis, diameters)
     F(x)=FEAT/LINE,UNBND,CART,x,y,z,i,j,k[,i2,j2,k2]        (point, direction, normal)
     F(x)=FEAT/LINE,BND,CART,x1,y1,z1,x2,y2,z2[,i2,j2,k2]
     MEAS/<type>,F(x),n   ...   ENDMES
@@ -23,6 +24,7 @@ from probegen.dmisrun.features import KINDS, SIDED, DmisFeature, arr, parse_nomi
 from probegen.dmisrun.frames import Frame
 from probegen.dmisrun.state import MeasBlock, NotExecutable, VmState
 from probegen.dmisrun.tolerances import parse_tolerance
+from probegen.errors import ProbegenError
 
 _QUALIFIERS = {"LINE": ("BND", "UNBND")} | {kind: ("INNER", "OUTER") for kind in SIDED}
 
@@ -44,7 +46,7 @@ def do_feat(state: VmState, st: Statement) -> None:
     numbers = state.numbers(params, f"FEAT/{kind} value")
     try:
         nominal = parse_nominal(st.label.name, str(kind), qualifier, numbers, state.scale)
-    except ValueError as exc:
+    except (ValueError, ProbegenError) as exc:  # a wrong count, a zero vector
         raise state.error(str(exc)) from None
     state.nominals[nominal.name] = to_machine(nominal, state.frame)
 

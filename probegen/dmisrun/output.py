@@ -88,6 +88,8 @@ def _values(feature: DmisFeature, frame: Frame, scale: float) -> list[float]:
         out += _direction(feature.normal, frame)
     if feature.kind in SIDED and feature.size is not None:
         out.append(feature.size if feature.kind == "CONE" else feature.size / scale)
+    if feature.minor is not None:
+        out.append(feature.minor / scale)
     if feature.length is not None:
         out.append(feature.length / scale)
     return out

@@ -4,13 +4,15 @@ Supported kinds and the actual value each reports (millimetres inside; the outpu
 writes program units):
 
 * ``TOL/DIAM,lo,hi``: actual diameter minus nominal; in tolerance if ``lo <= d <= hi``.
+  Not on a cone (an angle) nor a torus (it has two diameters, major and tube).
 * ``TOL/POS,2D|3D,zone[,...]``: the position deviation as a *diameter*, like the zone
   it is compared with: twice the distance of the actual from the nominal.  ``3D``: the
   distance of the actual location from the nominal location (for a plane, along its
   normal; for a cylinder or line, from the nominal location to the actual axis).
   ``2D``: the same measured square to the nominal axis or normal only (for an axis:
   where the actual axis crosses the plane through the nominal location square to the
-  nominal axis); for a sphere or point without a vector, square to the active Z axis.
+  nominal axis; a torus's centre is a point: its offset square to the nominal axis);
+  for a sphere or point without a vector, square to the active Z axis.
   Datum references after the zone (``RFS,DAT(A)...``) are accepted and not used: the
   deviation is taken in the active frame, which the program aligns to those datums.
 * ``TOL/FLAT,t`` (plane), ``TOL/CIRLTY,t`` (circle), ``TOL/CYLCTY,t`` (cylinder),
@@ -129,7 +131,7 @@ def evaluate(tolerance: Tolerance, actual: DmisFeature, nominal: DmisFeature,
 def _deviation(tolerance: Tolerance, actual: DmisFeature, nominal: DmisFeature,
                workplane_normal: tuple[float, float, float]) -> float:
     if tolerance.kind == "DIAM":
-        if actual.size is None or nominal.size is None or actual.kind == "CONE":
+        if actual.size is None or nominal.size is None or actual.kind in ("CONE", "TORUS"):
             raise ValueError(f"TOL/DIAM does not apply to the {actual.kind} {actual.name}")
         return actual.size - nominal.size
     if tolerance.kind == "POS":

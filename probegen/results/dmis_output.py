@@ -4,7 +4,7 @@ A DMIS measuring program writes its results as DMIS statements (``OUTPUT/FA(C1)`
 gives ``FA(C1)=FEAT/CIRCLE,...``).  This reader keeps what a report needs:
 
 * **feature actuals** ``FA(name)=FEAT/<type>,...`` for POINT, PLANE, LINE, CIRCLE,
-  SPHERE, CYLNDR and CONE, decoded into :class:`FeatureActual` (see ``LAYOUTS``);
+  SPHERE, CYLNDR, CONE and TORUS, decoded into :class:`FeatureActual` (see ``LAYOUTS``);
 * **tolerance actuals** ``TA(name)=TOL/<kind>,...,INTOL|OUTOL`` as
   :class:`ToleranceActual`;
 * **measured points** as :class:`MeasuredPoint`: ``PTMEAS/CART|POL,...`` lines echoed
@@ -67,14 +67,17 @@ class FeatureActual:
     Attributes:
         name: the label name, upper case (``A_CIRCLE`` of ``FA(A_CIRCLE)``).
         type: the DMIS feature type: ``POINT``, ``PLANE``, ``LINE``, ``CIRCLE``,
-            ``SPHERE``, ``CYLNDR`` or ``CONE``.
-        material: ``"INNER"`` (a hole), ``"OUTER"`` (a boss) or None (types without).
-        position: the feature's point: centre (circle, sphere), a point on the axis
+            ``SPHERE``, ``CYLNDR``, ``CONE`` or ``TORUS``.
+        material: ``"INNER"`` (a hole; a torus: air inside the tube), ``"OUTER"`` (a
+            boss; a torus: material inside the tube) or None (types without).
+        position: the feature's point: centre (circle, sphere, torus), a point on the axis
             (cylinder), the apex (cone), the point (point, plane, line start).
-        direction: unit normal (point, plane, circle), axis (cylinder, cone),
+        direction: unit normal (point, plane, circle), axis (cylinder, cone, torus),
             direction (line); None for a point written without one (or as 0, 0, 0)
             and a sphere without an axis.
-        diameter: circle, sphere and cylinder diameter.
+        diameter: circle, sphere and cylinder diameter; a torus's major diameter
+            (twice the radius of the tube's centre circle).
+        minor_diameter: a torus's tube (minor) diameter.
         length: cylinder length when written; bounded line length.
         angle: cone included (full apex) angle, degrees.
         end: end point of a bounded line (``LINE,BND``).
@@ -88,6 +91,7 @@ class FeatureActual:
     position: Vec3
     direction: Vec3 | None
     diameter: float | None = None
+    minor_diameter: float | None = None
     length: float | None = None
     angle: float | None = None
     end: Vec3 | None = None
@@ -211,6 +215,7 @@ LAYOUTS: dict[str, tuple[tuple[str, ...], ...]] = {
         ("position", "direction", "diameter", "length"),
     ),
     "CONE": (("position", "direction", "angle"),),
+    "TORUS": (("position", "direction", "diameter", "minor_diameter"),),
 }
 """The numbers after ``CART``/``POL`` each feature type may have, as field names.
 
@@ -218,9 +223,11 @@ LAYOUTS: dict[str, tuple[tuple[str, ...], ...]] = {
 A line is ``LINE,UNBND`` (point and direction) or ``LINE,BND`` (start and end points).
 """
 
-FEATURE_TYPES = ("POINT", "PLANE", "LINE", "CIRCLE", "SPHERE", "CYLNDR", "CONE")
+FEATURE_TYPES = ("POINT", "PLANE", "LINE", "CIRCLE", "SPHERE", "CYLNDR", "CONE", "TORUS")
 """The feature types read (other types are reported as not supported)."""
 
+_AXIAL = frozenset({"PLANE", "CIRCLE", "CYLNDR", "CONE", "TORUS", "LINE"})
+"""Types whose direction may not be 0, 0, 0."""
 _WIDTH = {"position": 3, "direction": 3, "end": 3, "normal": 3}
 _MATERIAL = ("INNER", "OUTER")
 _COORDINATES = ("CART", "POL")
@@ -345,9 +352,10 @@ def _size(params: tuple[Param, ...], at: int, name: str, units: _Units) -> float
         if not 0.0 < value < 180.0:
             raise _fail(params, at, "a cone angle between 0 and 180 degrees")
         return value
-    value = _number(params, at, units.length, f"a number ({name})")
+    what = name.replace("_", " ")
+    value = _number(params, at, units.length, f"a number ({what})")
     if not value > 0.0:
-        raise _fail(params, at, f"a {name} above 0")
+        raise _fail(params, at, f"a {what} above 0")
     return value
 
 
@@ -358,7 +366,7 @@ def _keywords(params: tuple[Param, ...], ftype: str) -> tuple[dict[str, str], in
         The words found by role and the index of the first number.
     """
     roles = {"coordinates": _COORDINATES}
-    if ftype in ("CIRCLE", "SPHERE", "CYLNDR", "CONE"):
+    if ftype in ("CIRCLE", "SPHERE", "CYLNDR", "CONE", "TORUS"):
         roles["material"] = _MATERIAL
     if ftype == "LINE":
         roles["bounds"] = _BOUNDS
@@ -412,7 +420,7 @@ def _layout(params: tuple[Param, ...], first: int, key: str) -> tuple[str, ...]:
 
 def _finish_feature(fields: dict[str, Any], params: tuple[Param, ...], first: int) -> None:
     """Check the direction a type needs and derive a bounded line's direction and length."""
-    if fields["type"] in ("PLANE", "CIRCLE", "CYLNDR", "CONE", "LINE") and "end" not in fields:
+    if fields["type"] in _AXIAL and "end" not in fields:
         if fields["direction"] is None:
             raise _fail(params, first + 3, "a direction (i, j, k) other than 0, 0, 0")
     if "end" in fields:
