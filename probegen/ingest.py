@@ -296,7 +296,8 @@ def to_json(ing: Ingested) -> str:
     if ing.decisions:  # features with in-process decisions (docs/actions.md)
         doc["decisions"] = [{"feature": d.feature, "key": d.key, "agrees": d.agrees,
                              "offline": None if d.offline is None else _f(d.offline),
-                             "machine": None if d.machine is None else _f(d.machine)}
+                             "machine": None if d.machine is None else _f(d.machine),
+                             "limit": _f(d.limit)}
                             for d in ing.decisions]
     return json.dumps(doc, indent=2) + "\n"
 

@@ -24,6 +24,9 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import REPO
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from mutations import mutate
 
 from probegen.errors import ProbegenError
 from probegen.report import palette, render_report, write_report
@@ -200,6 +203,99 @@ def test_user_text_is_escaped(results: dict[str, Any]) -> None:
     assert data["title"].startswith("Error balls of </script><b>&")
 
 
+# -- in-process decisions (docs/actions.md) ---------------------------------------------
+
+@pytest.fixture(scope="module")
+def decided(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
+    """results.json of the bore_block setup program run on the virtual machine: the bore
+    0.03 mm oversize (tool 12 wear +0.015) and 0.08 mm oversize (alarm 3010)."""
+    from test_actions_closed_loop import SPEC, run
+    from test_closed_loop_revolved import _make_model_module
+
+    from probegen.cad import load_step
+    from probegen.dialects import get_dialect
+    from probegen.ingest import ingest, to_json
+    from probegen.planning import plan_program
+    from probegen.spec import load_spec
+
+    spec = load_spec(REPO / SPEC)
+    text = get_dialect("fanuc").generate(plan_program(spec, runtime_variables=True).program)
+    out = {}
+    for bore in (50.03, 50.08):
+        tmp = tmp_path_factory.mktemp("decided")
+        _make_model_module().main(tmp / "part.step", bore_diameter=bore,  # type: ignore[attr-defined]
+                                  boss_diameter=20.0)
+        (tmp / "run.log").write_text(run(text, load_step(tmp / "part.step")).output)
+        out[f"{bore:.2f}"] = json.loads(to_json(ingest(tmp / "run.log", spec)))
+    return out
+
+
+def _row(html: str, feature: str, key: str) -> list[str]:
+    table = html.split(f'id="decisions-{feature}"')[1].split("</table>")[0]
+    row = re.search(rf'<tr class="(\w+)"><th scope="row">{key} <small>.*?</tr>', table)
+    assert row is not None, (feature, key)
+    return [row.group(1), *re.findall(r"<td[^>]*>(.*?)</td>", row.group(0))]
+
+
+def test_decisions_show_offline_and_machine_values(decided: dict[str, Any]) -> None:
+    doc = decided["50.03"]
+    html = render_report(doc)
+    assert '<a href="#decisions">' in html and '<section id="decisions">' in html
+    # the tool 12 radius wear the program wrote for the bore 0.03 oversize (RES BORE T12 C.0150)
+    cls, offline, machine, diff, limit, agreement = _row(html, "BORE", "C")
+    assert (cls, machine, agreement) == ("ok", "+0.0150", "agree")
+    assert abs(float(offline) - 0.015) <= 2e-4 and limit == "\u2264 0.0002"
+    assert abs(float(diff)) <= 2e-4
+    assert _row(html, "EDGE", "A")[2].startswith("+0.50")     # the part turned 0.5 degrees
+    assert _row(html, "BOSS", "NG")[1:3] == ["no", "no"]
+    tables = re.findall(r'id="decisions-(\w+)"', html)
+    assert tables == list(dict.fromkeys(d["feature"] for d in doc["decisions"]))
+    assert html.count("<tr class=") - render_report(
+        {k: v for k, v in doc.items() if k != "decisions"}).count("<tr class=") == len(
+        doc["decisions"])
+    assert render_report(doc) == html                          # byte-repeatable
+
+
+def test_decisions_show_a_disagreement_and_an_alarm(decided: dict[str, Any]) -> None:
+    doc = json.loads(json.dumps(decided["50.03"]))
+    bore_x = next(d for d in doc["decisions"] if d["feature"] == "BORE" and d["key"] == "X")
+    bore_x.update(machine=bore_x["machine"] + 0.001, agrees=False)
+    html = render_report(doc)
+    assert _row(html, "BORE", "X")[0] == "nok" and _row(html, "BORE", "X")[-1] == "DISAGREE"
+    assert '<span class="badge nok">DISAGREE</span>' in html.split('id="decisions-BORE"')[1]
+    stopped = render_report(decided["50.08"])
+    alarm = re.findall(r'<p class="alarm">(.*?)</p>', stopped)
+    assert len(alarm) == 1 and alarm[0].startswith("the program stopped: ERR OUTTOL BORE 1")
+    assert _row(stopped, "BORE", "C")[2] == "\u2013"         # not printed: stopped before
+
+
+DECISIONS_JSON = json.dumps({"features": [], "notes": ["the program stopped: ERR OUTTOL B 1"],
+                             "decisions": [{"feature": "B", "key": "C", "offline": 0.015,
+                                            "machine": 0.015, "agrees": True, "limit": 2e-4}]})
+
+
+@st.composite
+def mutated_decisions(draw: st.DrawFn) -> str:
+    return mutate(draw, DECISIONS_JSON, '0123456789.-,:"[]{}ntrufals')
+
+
+@settings(max_examples=150, deadline=None)
+@given(mutated_decisions())
+def test_mutated_decisions_give_a_page_or_a_probegen_error(text: str) -> None:
+    try:
+        doc = json.loads(text)
+    except ValueError:
+        return
+    try:
+        assert render_report(doc).startswith("<!DOCTYPE html>")
+    except ProbegenError:
+        pass
+
+
+def test_results_without_decisions_have_no_section(page: str) -> None:
+    assert "decisions" not in page and "Decisions" not in page
+
+
 # -- bad input --------------------------------------------------------------------------
 
 @pytest.mark.parametrize(("edit", "message"), [
@@ -213,6 +309,8 @@ def test_user_text_is_escaped(results: dict[str, Any]) -> None:
     (lambda d: d.__setitem__("calibration", {"functions": [{"name": "f", "positions": [1, 2],
                                                             "values": [1]}]}),
      "calibration.functions[0].values: expected as many values as positions (2)"),
+    (lambda d: d.__setitem__("decisions", [{"feature": "B", "key": "X", "offline": "1"}]),
+     "decisions[0].offline: expected a number, found '1'"),
 ])
 def test_bad_results_name_the_key(results: dict[str, Any], edit: Any, message: str) -> None:
     doc = json.loads(json.dumps(results))

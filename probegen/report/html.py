@@ -53,7 +53,8 @@ def render_report(results: Mapping[str, Any], *, title: str | None = None,
         title=title or _default_title(res), results=res, status=overall_status(res),
         views=sections.views(res),
         form={f.id: sections.form_plots(f) for f in res.features},
-        calibration=sections.calibration(res), generated=generated)
+        calibration=sections.calibration(res), decisions=sections.decisions(res),
+        generated=generated)
     return page.replace("\r\n", "\n")
 
 
@@ -99,7 +100,8 @@ def _env() -> jinja2.Environment:
         undefined=jinja2.StrictUndefined, autoescape=True, keep_trailing_newline=True,
         trim_blocks=True, lstrip_blocks=True)
     env.filters.update(mm=mm, dev=deviation, tol=tolerance, status=status,
-                       status_class=status_class, trusted=_markup)
+                       status_class=status_class, agreement=agreement,
+                       trusted=_markup)
     return env
 
 
@@ -134,6 +136,11 @@ def tolerance(c: Characteristic) -> str:
 def status(ok: bool | None) -> str:
     """``OK``, ``NOT OK`` or ``–`` (not toleranced)."""
     return "\u2013" if ok is None else ("OK" if ok else "NOT OK")
+
+
+def agreement(agrees: bool | None) -> str:
+    """``agree``, ``DISAGREE`` or ``–`` (a value missing on one side)."""
+    return "\u2013" if agrees is None else ("agree" if agrees else "DISAGREE")
 
 
 def status_class(ok: bool | None) -> str:

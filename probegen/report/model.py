@@ -12,6 +12,8 @@ Optional keys the report understands beyond ``ingest``'s output:
   ``radii``, ``source``);
 * ``calibration.functions``: ``[{"name", "positions", "values", "unit"?}]``, identified
   error functions (rotary axis M4, 21 terms M5), drawn as line plots.
+
+``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too.
 """
 
 from __future__ import annotations
@@ -126,6 +128,28 @@ class Function:
 
 
 @dataclass(frozen=True, slots=True)
+class Decision:
+    """One value of an in-process decision (``probegen.ingest_actions.Decision``).
+
+    Attributes:
+        feature: feature id.
+        key: ``X Y D F P A E NG C`` (``probegen.ir_actions``; ``C`` the tool correction).
+        offline: the value ``ingest`` computed from the log's points (mm, degrees; ``NG``
+            1 or 0); None: too few points.
+        machine: the value the machine printed in its ``RES`` line; None: not printed.
+        agrees: within ``limit`` of each other; None when one is missing.
+        limit: the largest difference that counts as agreeing (None in older results).
+    """
+
+    feature: str
+    key: str
+    offline: float | None
+    machine: float | None
+    agrees: bool | None
+    limit: float | None
+
+
+@dataclass(frozen=True, slots=True)
 class Results:
     """What the report shows, read from ``results.json``."""
 
@@ -138,6 +162,7 @@ class Results:
     path: tuple[Segment, ...]
     probe: ProbeRadii | None
     functions: tuple[Function, ...]
+    decisions: tuple[Decision, ...] = ()
 
 
 def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Results:
@@ -167,6 +192,9 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         functions=tuple(_function(r, f, f"calibration.functions[{i}]")
                         for i, f in enumerate(r.items(cal.get("functions", []),
                                                       "calibration.functions"))),
+        decisions=tuple(_decision(r, d, f"decisions[{i}]")
+                        for i, d in enumerate(r.items(root.get("decisions", []),
+                                                      "decisions"))),
     )
 
 
@@ -208,6 +236,16 @@ def _segment(r: _Reader, value: object, key: str) -> Segment:
                    kind=r.text(s.get("kind"), f"{key}.kind"),
                    start=r.vec3(s.get("start"), f"{key}.start"),
                    end=r.vec3(s.get("end"), f"{key}.end"))
+
+
+def _decision(r: _Reader, value: object, key: str) -> Decision:
+    d = r.mapping(value, key)
+    return Decision(feature=r.text(d.get("feature"), f"{key}.feature"),
+                    key=r.text(d.get("key"), f"{key}.key"),
+                    offline=r.optional_number(d.get("offline"), f"{key}.offline"),
+                    machine=r.optional_number(d.get("machine"), f"{key}.machine"),
+                    agrees=r.flag(d.get("agrees"), f"{key}.agrees"),
+                    limit=r.optional_number(d.get("limit"), f"{key}.limit"))
 
 
 def _probe(r: _Reader, value: object, key: str) -> ProbeRadii:

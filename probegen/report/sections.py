@@ -10,7 +10,14 @@ from dataclasses import dataclass
 
 from probegen.report import palette, plots
 from probegen.report.deviation_plot import deviation_map_svg
-from probegen.report.model import Feature, Function, ProbeRadii, Results, sphere_test_radii
+from probegen.report.model import (
+    Decision,
+    Feature,
+    Function,
+    ProbeRadii,
+    Results,
+    sphere_test_radii,
+)
 from probegen.report.numbers import fixed, signed
 from probegen.report.scene import STYLES, Scene, ball_scene, path_scene, scene_json
 
@@ -62,6 +69,78 @@ class Calibration:
     radii: tuple[RadiiPlots, ...]
     functions: tuple[str, ...]
     messages: tuple[str, ...]
+
+
+DECISION_KEYS = {
+    "X": ("centre X", "mm"), "Y": ("centre Y", "mm"), "D": ("diameter", "mm"),
+    "F": ("roundness", "mm"), "P": ("face position", "mm"),
+    "A": ("angle from nominal", "\u00b0"), "E": ("excess material", "mm"),
+    "NG": ("limit exceeded", ""), "C": ("tool wear correction", "mm"),
+}
+"""What each decision key is (``probegen.ir_actions``) and its unit."""
+STOPPED = "the program stopped: ERR "
+"""How ``probegen ingest`` starts the note of an alarm (``ERR <code> <feature> ..``)."""
+
+
+@dataclass(frozen=True, slots=True)
+class DecisionRow:
+    """One value of a decision as the table prints it (texts; ``agreement`` a status)."""
+
+    key: str
+    meaning: str
+    offline: str
+    machine: str
+    difference: str
+    limit: str
+    agrees: bool | None
+    exceeded: bool
+
+
+@dataclass(frozen=True, slots=True)
+class DecisionTable:
+    """A feature's decision values, whether they all agree and the alarms it raised."""
+
+    feature: str
+    rows: tuple[DecisionRow, ...]
+    agrees: bool | None
+    alarms: tuple[str, ...]
+
+
+def decisions(results: Results) -> list[DecisionTable]:
+    """The in-process decisions by feature (in results order), offline next to machine."""
+    features = list(dict.fromkeys(d.feature for d in results.decisions))
+    out = []
+    for feature in features:
+        rows = tuple(_decision_row(d) for d in results.decisions if d.feature == feature)
+        known = [r.agrees for r in rows if r.agrees is not None]
+        alarms = tuple(n for n in results.notes
+                       if n.startswith(STOPPED) and f" {feature} " in n[len(STOPPED):])
+        out.append(DecisionTable(feature, rows, all(known) if known else None, alarms))
+    return out
+
+
+def _decision_row(d: Decision) -> DecisionRow:
+    """Lengths 4 decimals (the log's), the angle 6 (as printed); corrections (``A E C``)
+    signed; the flag ``NG`` as yes / no, compared exactly."""
+    meaning, unit = DECISION_KEYS.get(d.key, (d.key, ""))
+    decimals = 6 if d.key == "A" else 4
+    flag = d.key == "NG"
+    both = d.offline is not None and d.machine is not None
+
+    def text(v: float | None) -> str:
+        if v is None:
+            return "\u2013"
+        if flag:
+            return "yes" if v else "no"
+        return signed(v, decimals) if d.key in ("A", "E", "C") else fixed(v, decimals)
+
+    return DecisionRow(
+        key=d.key, meaning=f"{meaning} ({unit})" if unit else meaning,
+        offline=text(d.offline), machine=text(d.machine),
+        difference=signed((d.offline or 0.0) - (d.machine or 0.0), decimals)
+        if both and not flag else "\u2013",
+        limit="\u2013" if d.limit is None or flag else f"\u2264 {fixed(d.limit, decimals)}",
+        agrees=d.agrees, exceeded=flag and bool(d.offline or d.machine))
 
 
 def views(results: Results) -> list[View]:
