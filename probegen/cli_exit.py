@@ -1,0 +1,22 @@
+"""The command line's process exit codes (see :mod:`probegen.cli`)."""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class ExitCode(IntEnum):
+    """Process exit codes."""
+
+    OK = 0
+    ERROR = 1
+    SPEC = 2
+    MODEL = 3
+    PLANNING = 4
+    UNSUPPORTED = 5
+    PARSE = 6
+    CALIBRATION = 7
+    NOT_OK = 8
+    CAPTURE_INCOMPLETE = 9
+    SIM_ALARM = 10
+    USAGE = 64

@@ -1,0 +1,114 @@
+"""The results commands of the command line: ``ingest``, ``capture``, ``qif`` and
+``report`` (registered by :func:`probegen.cli.build_parser`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from probegen.cli_exit import ExitCode
+from probegen.errors import ProbegenError
+
+DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
+"""``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
+CMM's and a CMM's results), any other as a DPRNT log."""
+
+
+def _ingest(args: argparse.Namespace) -> int:
+    from probegen.compensate import calibration_toml, load_calibration
+    from probegen.ingest import ingest, to_table, write_outputs
+    from probegen.spec import load_spec
+
+    spec = load_spec(args.spec)
+    cal = load_calibration(args.calibration) if args.calibration else None
+    if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
+        from probegen.ingest import ingest_dmis
+
+        result = ingest_dmis(args.log, spec)
+    else:
+        result = ingest(args.log, spec, calibration=cal, with_path=True)
+    js, cs = write_outputs(result, Path(args.output))
+    sys.stdout.write(to_table(result))
+    for note in result.notes:
+        print(f"note: {note}")
+    for diag in result.log.diagnostics:
+        print(f"diagnostic: {diag}")
+    print(f"wrote {js} and {cs}")
+    if args.write_calibration:
+        if not result.results:
+            raise ProbegenError("--write-calibration: expected a sphere test in the spec, "
+                                "found none")
+        target = Path(args.write_calibration)
+        target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
+                          encoding="utf-8", newline="\n")
+        print(f"wrote the probe calibration {target}")
+    failed = (any(r.ok is False for r in result.results)
+              or any(r.ok is False for r in result.revolved)
+              or any(r.ok is False for r in result.freeform))
+    return ExitCode.NOT_OK if failed else ExitCode.OK
+
+
+_PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
+
+
+def _capture(args: argparse.Namespace) -> int:
+    from probegen.results.capture import capture
+
+    print(f"capturing from {args.port} into {args.out} ({args.baud} baud, {args.bits}"
+          f"{args.parity}{args.stop_bits:g}, xon/xoff {'on' if args.xonxoff else 'off'}); "
+          "start the program now, Ctrl-C stops", file=sys.stderr)
+    from probegen.progress import Bar
+
+    with Bar("capturing", unit="bytes") as bar:
+        res = capture(args.port, args.out, baudrate=args.baud, bytesize=args.bits,
+                      parity=_PARITY[args.parity], stopbits=args.stop_bits,
+                      xonxoff=args.xonxoff, timeout_s=args.timeout, append=args.append,
+                      progress=lambda _total, chunk: bar(len(chunk)))
+    why = {"end-marker": "the program's end marker arrived",
+           "timeout": f"nothing arrived for {args.timeout:g} s",
+           "interrupted": "stopped by the user",
+           "disconnected": f"the port went away ({res.detail})"}[res.reason]
+    print(f"capture ended: {why}; {res.bytes} bytes kept in {res.path}")
+    return ExitCode.OK if res.reason == "end-marker" else ExitCode.CAPTURE_INCOMPLETE
+
+
+def _qif(args: argparse.Namespace) -> int:
+    from probegen.qif import dmis_output_to_qif, ingested_to_qif, write_qif
+    from probegen.sim.vm import program_kind
+
+    if program_kind(args.input) == "dmis":
+        from probegen.qif_dmis import read_dmis_tolerances
+        from probegen.results import read_dmis_output
+
+        out = read_dmis_output(args.input, strict=args.strict)
+        limits = None
+        if args.program:
+            text = Path(args.program).read_text(encoding="utf-8", errors="replace")
+            limits = read_dmis_tolerances(text, source=args.program)
+        export = dmis_output_to_qif(out, tolerances=limits)
+        text, notes = export.text, export.notes
+    else:
+        from probegen.compensate import load_calibration
+        from probegen.ingest import ingest
+        from probegen.spec import load_spec
+
+        if not args.spec:
+            raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
+        spec = load_spec(args.spec)
+        cal = load_calibration(args.calibration) if args.calibration else None
+        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal),
+                                      spec=spec), ()
+    path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
+    for note in notes:
+        print(f"note: {note}")
+    print(f"wrote {path}{' (valid against the QIF 3 schema)' if args.validate else ''}")
+    return ExitCode.OK
+
+
+def _report(args: argparse.Namespace) -> int:
+    from probegen.report import write_report
+
+    out = write_report(args.results, args.output, title=args.title)
+    print(f"wrote the report {out}")
+    return ExitCode.OK
