@@ -444,18 +444,8 @@ def _depths(t: Table, k: float) -> tuple[float, ...] | None:
 
 
 def _revolved_tolerance(t: Table, k: float) -> RevolvedTolerance:
-    diameter = None
-    if t.has("diameter"):
-        lo, hi = t.get_vec("diameter", 2) or (0.0, 0.0)
-        if lo > hi:
-            raise t.fail("diameter", "[lower, upper] deviations with lower <= upper")
-        diameter = (lo * k, hi * k)
-    angle = None
-    if t.has("angle"):
-        lo, hi = t.get_vec("angle", 2) or (0.0, 0.0)
-        if lo > hi:
-            raise t.fail("angle", "[lower, upper] deviations in degrees with lower <= upper")
-        angle = (lo, hi)
+    diameter = t.get_limits("diameter", k)
+    angle = t.get_limits("angle", unit=" in degrees")
     values = {key: t.get_float(key, positive=True)
               for key in ("position", "form", "roundness", "taper")}
     t.done()
@@ -507,11 +497,6 @@ def _direction(t: Table) -> Vec3:
 
 
 def _deviation(t: Table, k: float) -> tuple[float, float] | None:
-    value = None
-    if t.has("deviation"):
-        lo, hi = t.get_vec("deviation", 2) or (0.0, 0.0)
-        if lo > hi:
-            raise t.fail("deviation", "[lower, upper] deviations with lower <= upper")
-        value = (lo * k, hi * k)
+    value = t.get_limits("deviation", k)
     t.done()
     return value

@@ -231,12 +231,7 @@ def _contacts(t: Table, k: float, least: int) -> tuple[Vec3, ...]:
 
 
 def _planar_tolerance(t: Table, k: float, kind: str) -> PlanarTolerance:
-    position = None
-    if t.has("position"):
-        lo, hi = t.get_vec("position", 2) or (0.0, 0.0)
-        if lo > hi:
-            raise t.fail("position", "[lower, upper] deviations with lower <= upper")
-        position = (lo * k, hi * k)
+    position = t.get_limits("position", k)
     angle = t.get_float("angle", positive=True, maximum=45.0) if kind == "line" else None
     t.done()
     return PlanarTolerance(position, angle)

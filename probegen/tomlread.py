@@ -148,6 +148,18 @@ class Table:
             raise self.fail(key, f"an array of {n} numbers")
         return tuple(float(v) for v in value)
 
+    def get_limits(self, key: str, scale: float = 1.0, unit: str = ""
+                   ) -> tuple[float, float] | None:
+        """``[lower, upper]`` deviations (lower <= upper) times ``scale``, or None when
+        absent; ``unit`` (e.g. ``" in degrees"``) goes into the message."""
+        value = self.get_vec(key, 2)
+        if value is None:
+            return None
+        lo, hi = value
+        if lo > hi:
+            raise self.fail(key, f"[lower, upper] deviations{unit} with lower <= upper")
+        return (lo * scale, hi * scale)
+
     def get_str_list(self, key: str, default: Sequence[str] = ()) -> tuple[str, ...]:
         """An array of strings."""
         value = self._raw(key, list(default), False)
