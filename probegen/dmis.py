@@ -38,7 +38,7 @@ from typing import Any, TypeAlias, cast
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from probegen.errors import Diagnostic, ProgramParseError
+from probegen.errors import Diagnostic, ProgramParseError, readable_list
 from probegen.resources import grammar_text
 
 LABEL_KINDS = frozenset(
@@ -479,12 +479,7 @@ def _expected_list(terminals: set[str]) -> str:
     """Return ``"a, b or c"`` for the expected terminals; operators become one entry."""
     if "STAR" in terminals:  # after an operand: any binary operator may follow
         terminals = (terminals - _OPERATORS_AFTER_OPERAND) | {"OPERATOR"}
-    order = list(_READABLE)
-    known = sorted((t for t in terminals if t in _READABLE), key=order.index)
-    names = [_READABLE[t] for t in known] + sorted(t for t in terminals if t not in _READABLE)
-    if not names:
-        return "nothing more"
-    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
+    return readable_list(terminals, _READABLE)
 
 
 _FOUND = {"STRING": "the quoted string {}", "NAME": "the word '{}'", "NUMBER": "the number {}"}

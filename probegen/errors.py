@@ -50,6 +50,18 @@ def caret(text: str, column: int) -> str:
     return f"    {line}\n    {pad}^"
 
 
+def readable_list(terminals: Iterable[str], readable: dict[str, str]) -> str:
+    """``"a, b or c"`` for a parser's expected terminals: those ``readable`` names in its
+    order, then the others by name; ``"nothing more"`` when there are none."""
+    terminals = set(terminals)
+    order = list(readable)
+    known = sorted((t for t in terminals if t in readable), key=order.index)
+    names = [readable[t] for t in known] + sorted(t for t in terminals if t not in readable)
+    if not names:
+        return "nothing more"
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
+
+
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
     """Return ``" (did you mean 'x'?)"`` for the closest choice, or ``""``."""
     close = difflib.get_close_matches(word, sorted(choices), n=1, cutoff=0.6)

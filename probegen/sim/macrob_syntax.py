@@ -13,6 +13,7 @@ import functools
 from lark import Lark, Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
+from probegen.errors import readable_list
 from probegen.resources import grammar_text
 
 
@@ -93,12 +94,7 @@ def _expected(terminals: set[str]) -> str:
     for name, members in _GROUPS.items():
         if terminals & members:
             terminals = (terminals - members) | {name}
-    order = list(_READABLE)
-    known = sorted((t for t in terminals if t in _READABLE), key=order.index)
-    names = [_READABLE[t] for t in known] + sorted(t for t in terminals if t not in _READABLE)
-    if not names:
-        return "nothing more"
-    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
+    return readable_list(terminals, _READABLE)
 
 
 def _describe(token: Token) -> str:
