@@ -17,6 +17,7 @@ from typing import Any
 from probegen import __version__
 from probegen.cli_exit import ExitCode
 from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _target
+from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report
 from probegen.errors import ProbegenError
 
@@ -35,7 +36,6 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     import numpy as np
 
     from probegen.machine.kinematics import load_machine
-    from probegen.machine.probe_model import Lobing, ProbeModel
     from probegen.sim.contact import PlacedPart
     from probegen.sim.serial_play import PtyLink
     from probegen.sim.vm import VirtualMachine, control_state, program_kind, run_text
@@ -55,7 +55,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         forms = load_forms(args.form) if args.form else ()
         placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset,
                                        forms=forms)
-    probe = ProbeModel(ball, Lobing(*args.lobing), noise_sigma=args.noise, seed=args.seed)
+    probe = probe_from_args(args, ball)
     kin = load_machine(args.errors) if args.errors else None
     from probegen.progress import Bar
 
@@ -214,12 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=float, default=0.0, metavar="DEG",
                     help="part rotation about Z, degrees")
-    sm.add_argument("--lobing", type=float, nargs=3, default=(0.0, 0.0, 0.0),
-                    metavar=("LATERAL", "AXIAL", "LOBE"), help="probe pre-travel, mm")
-    sm.add_argument("--noise", type=float, default=0.0, help="trigger noise sigma, mm")
     sm.add_argument("--form", metavar="FILE",
                     help="planted form errors of revolved faces (TOML, docs/sim.md)")
-    sm.add_argument("--seed", type=int, default=0, help="noise seed")
+    add_probe_options(sm)
     sm.add_argument("-o", "--output", default="-", help="what the machine sends (default -)")
     sm.add_argument("--pty", metavar="LINK",
                     help="play the output over a pseudo-terminal linked at LINK")

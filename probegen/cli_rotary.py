@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.errors import ProbegenError
 
 
@@ -34,10 +35,7 @@ def add_rotary_commands(sub: Any) -> None:
     s.add_argument("--spec", required=True, help="the spec (the sphere, the pivot length)")
     s.add_argument("--errors", required=True,
                    help="five-axis kinematics and errors (TOML), e.g. five-axis-bc.toml")
-    s.add_argument("--lobing", type=float, nargs=3, default=(0.0, 0.0, 0.0),
-                   metavar=("LATERAL", "AXIAL", "LOBE"), help="probe pre-travel, mm")
-    s.add_argument("--noise", type=float, default=0.0, help="trigger noise sigma, mm")
-    s.add_argument("--seed", type=int, default=0, help="noise seed")
+    add_probe_options(s)
     s.add_argument("-o", "--output", default="-", help="the DPRNT log (default -)")
     s.set_defaults(func=_sim)
     i = rsub.add_parser("identify", help="the rotary-axis errors from a test's DPRNT log")
@@ -75,7 +73,6 @@ def _sim(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from probegen.machine.kinematics import Topology, load_machine
-    from probegen.machine.probe_model import Lobing, ProbeModel
     from probegen.planning.rotary_spec import load_rotary_spec
     from probegen.sim.contact import PlacedPart
     from probegen.sim.vm import VirtualMachine, run_text
@@ -88,8 +85,7 @@ def _sim(args: argparse.Namespace) -> int:
     if machine.pivot_length == 0.0:
         machine = replace(machine, pivot_length=spec.pivot_length)
     part = PlacedPart.from_spheres([spec.sphere_centre], [spec.sphere_radius])
-    probe = ProbeModel(spec.machine.probe.ball_radius, Lobing(*args.lobing),
-                       noise_sigma=args.noise, seed=args.seed)
+    probe = probe_from_args(args, spec.machine.probe.ball_radius)
     text = Path(args.program).read_text(encoding="ascii", errors="replace")
     result = run_text(text, VirtualMachine(part, probe, machine), kind="macrob",
                       source=args.program)
