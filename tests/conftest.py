@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import difflib
+import importlib.util
 import os
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -18,6 +20,16 @@ def in_repo(monkeypatch: pytest.MonkeyPatch) -> Path:
     """Run the test with the repository root as the working directory."""
     monkeypatch.chdir(REPO)
     return REPO
+
+
+def sample_script(sample: str) -> ModuleType:
+    """The STEP-making script ``samples/<sample>/make_model.py``, loaded as a module."""
+    spec = importlib.util.spec_from_file_location(
+        f"{sample}_make_model", REPO / "samples" / sample / "make_model.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def assert_golden(path: Path, actual: str) -> None:

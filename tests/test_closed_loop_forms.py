@@ -26,7 +26,6 @@ checked to 1e-4 mm against the truth.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -254,13 +253,3 @@ def test_too_few_sections_or_touches_are_notes(tmp_path: Path) -> None:
     assert "feature RIM: not evaluated, 16 touches in 2 sections (at least 8 needed, in 3 " \
         "sections)" in ing.notes
     assert "feature RIM: no touch for points 17-24" in ing.notes
-
-
-def test_revolved_block_step_is_repeatable(tmp_path: Path) -> None:
-    spec = importlib.util.spec_from_file_location(
-        "revolved_block_make_model", REPO / "samples/revolved_block/make_model.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    fresh = module.main(tmp_path / "revolved_block.step")
-    assert fresh.read_bytes() == (REPO / "samples/revolved_block/revolved_block.step").read_bytes()

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO
+from conftest import REPO, sample_script
 
 from probegen import cad, ir
 from probegen.cad.freeform import (
@@ -199,10 +198,7 @@ def _roofed_model(tmp_path: Path) -> Path:
     """The sample part with a slab hanging 4 mm above the surface's low end (x < 12)."""
     from build123d import Align, Box, Compound, Pos, export_step
 
-    loader = importlib.util.spec_from_file_location("ffm", REPO / "samples/freeform/make_model.py")
-    assert loader is not None and loader.loader is not None
-    module = importlib.util.module_from_spec(loader)
-    loader.loader.exec_module(module)
+    module = sample_script("freeform")
     roof = Pos(-5.0, -5.0, 26.0) * Box(17.0, 50.0, 3.0, align=(Align.MIN,) * 3)
     target = tmp_path / "roofed.step"
     export_step(Compound([module.make_part(), roof]), target)

@@ -10,7 +10,7 @@ Run from anywhere::
 
 It writes ``bore_block.step`` beside this script.  The export is byte-repeatable in the
 same way as ``samples/sphere25/make_model.py`` (the FILE_NAME time stamp is pinned to
-``FIXED_TIMESTAMP``); tests/test_closed_loop_revolved.py checks that a fresh export
+``FIXED_TIMESTAMP``); tests/test_samples.py checks that a fresh export
 equals the committed file and builds variants (another bore diameter) with
 ``make_part``; tests/test_actions_closed_loop.py also plants a boss of another
 diameter.

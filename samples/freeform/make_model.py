@@ -10,7 +10,7 @@ Run from anywhere::
     .venv/bin/python samples/freeform/make_model.py
 
 It writes ``freeform.step`` beside this script, byte-repeatable (the FILE_NAME time
-stamp is pinned to ``FIXED_TIMESTAMP``); tests/test_freeform_closed_loop.py checks that
+stamp is pinned to ``FIXED_TIMESTAMP``); tests/test_samples.py checks that
 a fresh export equals the committed file.
 """
 

@@ -14,7 +14,7 @@ Run from anywhere::
 
 It writes ``revolved_block.step`` beside this script, byte-repeatable (the FILE_NAME
 time stamp is pinned to ``FIXED_TIMESTAMP``, as in ``samples/bore_block``);
-tests/test_closed_loop_forms.py checks that a fresh export equals the committed file.
+tests/test_samples.py checks that a fresh export equals the committed file.
 """
 
 from __future__ import annotations

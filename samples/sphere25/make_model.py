@@ -12,7 +12,7 @@ FILE_NAME time stamp, which OCCT would fill with the current time, is pinned to
 ``FIXED_TIMESTAMP`` (build123d's ``export_step(timestamp=...)``), and nothing else in
 the file depends on the clock or the host.  The header names the OCCT version
 ("Open CASCADE STEP processor 8.0"), so another OCCT release may change the bytes;
-tests/test_cad.py checks that a fresh export equals the committed file.
+tests/test_samples.py checks that a fresh export equals the committed file.
 """
 
 from __future__ import annotations
