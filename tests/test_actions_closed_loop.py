@@ -20,8 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO
-from test_closed_loop_revolved import _make_model_module
+from conftest import REPO, sample_script
 
 from probegen import cad
 from probegen.dialects import get_dialect
@@ -50,12 +49,12 @@ def rot_z(a: float) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, cad.Model]:
-    make = _make_model_module()
+    make = sample_script("bore_block")
     out = {"nominal": cad.load_step(REPO / "samples/bore_block/bore_block.step")}
     for name, bore, boss in (("bore+0.03", 50.03, 20.0), ("bore+0.08", 50.08, 20.0),
                              ("boss+0.05", 50.0, 20.05)):
         path = tmp_path_factory.mktemp("variant") / f"{name}.step"
-        make.main(path, bore_diameter=bore, boss_diameter=boss)  # type: ignore[attr-defined]
+        make.main(path, bore_diameter=bore, boss_diameter=boss)
         out[name] = cad.load_step(path)
     return out
 

@@ -209,8 +209,8 @@ def test_user_text_is_escaped(results: dict[str, Any]) -> None:
 def decided(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
     """results.json of the bore_block setup program run on the virtual machine: the bore
     0.03 mm oversize (tool 12 wear +0.015) and 0.08 mm oversize (alarm 3010)."""
+    from conftest import sample_script
     from test_actions_closed_loop import SPEC, run
-    from test_closed_loop_revolved import _make_model_module
 
     from probegen.cad import load_step
     from probegen.dialects import get_dialect
@@ -223,8 +223,8 @@ def decided(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any
     out = {}
     for bore in (50.03, 50.08):
         tmp = tmp_path_factory.mktemp("decided")
-        _make_model_module().main(tmp / "part.step", bore_diameter=bore,  # type: ignore[attr-defined]
-                                  boss_diameter=20.0)
+        sample_script("bore_block").main(tmp / "part.step", bore_diameter=bore,
+                                         boss_diameter=20.0)
         (tmp / "run.log").write_text(run(text, load_step(tmp / "part.step")).output)
         out[f"{bore:.2f}"] = json.loads(to_json(ingest(tmp / "run.log", spec)))
     return out
