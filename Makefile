@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test goldens lint typecheck bench clean
+.PHONY: demo test fuzz goldens lint typecheck bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,12 @@ test: $(STAMP)
 	$(BIN)/python -m pytest
 	$(BIN)/ruff check probegen tests benchmarks samples
 	$(BIN)/mypy probegen
+
+# The property-based tests, long and random (tests/fuzzing.py); FACTOR scales the examples.
+FACTOR ?= 20
+fuzz: $(STAMP)
+	PROBEGEN_HYPOTHESIS=fuzz PROBEGEN_FUZZ_FACTOR=$(FACTOR) $(BIN)/python -m pytest -q \
+	    $$(grep -l '@given' tests/test_*.py)
 
 goldens: $(STAMP)
 	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q tests/test_golden.py tests/test_bad_inputs.py \

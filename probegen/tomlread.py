@@ -58,8 +58,9 @@ class Table:
         return f"{self.file}: {dotted}"
 
     def fail(self, key: str, expected: str) -> SpecError:
-        """Build the error for a bad value under ``key``."""
-        return SpecError(f"{self.where(key)}: expected {expected}, found {self.data[key]!r}")
+        """Build the error for a bad (or missing) value under ``key``."""
+        found = repr(self.data[key]) if key in self.data else "nothing (the key is missing)"
+        return SpecError(f"{self.where(key)}: expected {expected}, found {found}")
 
     def has(self, key: str) -> bool:
         """Whether ``key`` is present (marks it as known)."""

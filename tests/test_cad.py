@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from build123d import Align, Box, Cone, Cylinder, GeomType, Part, Pos, Sphere, export_step, fillet
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -292,7 +293,7 @@ def test_step_crashing_occt_is_a_model_error(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------- robustness
 
-_FUZZ = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+_FUZZ = settings(max_examples=examples(30), suppress_health_check=[HealthCheck.too_slow])
 
 
 def _load_or_model_error(tmp_path: Path, data: bytes) -> None:

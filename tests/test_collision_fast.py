@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -98,7 +99,7 @@ def nist() -> Near:
 
 
 _unit = st.floats(-1.0, 1.0)
-_FAST = settings(max_examples=60, deadline=None,
+_FAST = settings(max_examples=examples(60),
                  suppress_health_check=[HealthCheck.too_slow,
                                         HealthCheck.function_scoped_fixture])
 

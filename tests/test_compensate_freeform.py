@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -230,7 +231,7 @@ def test_bad_data_raise_probegen_error(call: object, match: str) -> None:
         call()  # type: ignore[operator]
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(0, 2 ** 32 - 1), st.integers(1, 5), st.integers(1, 5),
        st.sampled_from([0.0, 1e-13, 1.0, 1e6]))
 def test_methods_end_in_a_result_or_a_probegen_error(seed: int, m: int, k: int,
@@ -288,7 +289,7 @@ def test_deviation_map_svg_is_deterministic_and_drawn_to_scale() -> None:
         deviation_map_svg(pts, dev[:2], title="x")
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100))
 @given(st.lists(st.tuples(st.floats(allow_nan=True, allow_infinity=True, width=32),
                           st.floats(-1e4, 1e4), st.floats(-1e4, 1e4),
                           st.floats(allow_nan=True, allow_infinity=False, width=32)),

@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 from conftest import REPO, SHARED
+from fuzzing import examples
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -164,7 +165,7 @@ def test_one_contact_takes_well_under_5_ms(part: PlacedPart) -> None:
     assert float(np.median(spent)) < 0.005
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=examples(30))
 @given(st.tuples(*[st.floats(-1.0, 1.0)] * 3), st.tuples(*[st.floats(-1.0, 1.0)] * 3),
        st.floats(0.2, 4.0), st.floats(2.0, 12.0))
 def test_property_contact_touches_and_the_way_there_is_clear(

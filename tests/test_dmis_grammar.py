@@ -6,6 +6,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -342,7 +343,7 @@ PARAMS = st.recursive(
 )
 
 
-@settings(max_examples=150, deadline=2000)
+@settings(max_examples=examples(150))
 @given(st.lists(PARAMS, max_size=6).map(tuple), st.none() | LABELS)
 def test_round_trip_property(params: tuple[Param, ...], label: Label | None) -> None:
     statement = Statement(1, label, "ANY", params, "")
@@ -459,7 +460,7 @@ def ends_well(text: str) -> None:
         assert isinstance(result, DmisFile)
 
 
-@settings(max_examples=200, deadline=2000)
+@settings(max_examples=examples(200))
 @given(st.text(DMIS_ALPHABET, max_size=120) | st.text(max_size=80))
 def test_random_text_parses_or_fails_cleanly(text: str) -> None:
     ends_well(text)
@@ -472,7 +473,7 @@ EDITS = st.lists(
 )
 
 
-@settings(max_examples=200, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(200), suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(NIST_TEXTS), EDITS)
 def test_mutated_nist_files_parse_or_fail_cleanly(
     text: str, edits: list[tuple[str, int, str]]

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -371,7 +372,7 @@ def test_logical_statements_keep_physical_lines() -> None:
 
 # --- never another exception, never a hang --------------------------------------------------
 
-FUZZ = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+FUZZ = settings(max_examples=examples(200), suppress_health_check=[HealthCheck.too_slow])
 ALPHABET = "FAT()=/,$'.-+0123456789EINCRLUPMSODXYZ \t\r\n\x00é"
 
 
@@ -494,7 +495,7 @@ def dprnt_line(draw: st.DrawFn) -> str:
     return f"{b[7]}{kind} {middle}{xyz}{draw(st.sampled_from(['', ' ', ' %', ' Q']))}"
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(300), suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(dprnt_line(), max_size=12), st.sampled_from(["\n", "\r\n", "\r", "\n\x00"]))
 def test_dprnt_fast_path_equals_lark_on_generated_logs(lines: list[str], end: str) -> None:
     _same(end.join(lines))

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -165,7 +166,7 @@ def test_grammar_reads_the_torus_statement() -> None:
     assert st_.params == ("TORUS", "OUTER", "CART", 25, 25, 26, 0, 0, 1, 38, 8)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60))
 @given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True),
                           st.integers(-10, 10), st.sampled_from(["INNER", "OUTER", "CART"])),
                 max_size=12))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -49,7 +50,7 @@ def values(draw: st.DrawFn) -> tuple[tuple[str, float], ...]:
     return tuple((k, n / 10**4) for k, n in zip(keys, nums, strict=True))
 
 
-@settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(values())
 def test_printed_values_round_trip(pairs: tuple[tuple[str, float], ...]) -> None:
     line = "RES F1 " + " ".join(f"{k}{v:.4f}" for k, v in pairs)
@@ -62,7 +63,7 @@ def mutated(draw: st.DrawFn) -> str:
     return mutate(draw, LOG, "RES XYNG.-+0123 \n")
 
 
-@settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(mutated())
 def test_mutated_results_never_crash(text: str) -> None:
     try:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -195,7 +196,7 @@ KINDS = {
 }
 
 
-@settings(max_examples=120, deadline=None)
+@settings(max_examples=examples(120))
 @given(st.sampled_from(sorted(KINDS)), st.integers(3, 24),
        st.lists(st.floats(-60.0, 60.0, allow_nan=False), min_size=72, max_size=72),
        st.integers(0, 3))

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -385,7 +386,7 @@ FITS_3D = [fits.fit_line_3d, fits.fit_plane, fits.fit_circle_3d, fits.fit_sphere
 FITS_2D = [fits.fit_line_2d, fits.fit_circle_2d]
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(120), suppress_health_check=[HealthCheck.too_slow])
 @given(st.composite(_degenerate)())
 def test_any_finite_input_fits_or_raises(pts: np.ndarray) -> None:
     with warnings.catch_warnings():

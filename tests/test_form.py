@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -137,7 +138,7 @@ def test_bad_form_files(tmp_path: Path, text: str, message: str) -> None:
         load_forms(path)
 
 
-@settings(max_examples=150, deadline=None,
+@settings(max_examples=examples(150),
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.data())
 def test_mutated_form_files(tmp_path: Path, data: st.DataObject) -> None:
@@ -186,7 +187,7 @@ def test_cli_form_needs_a_model(in_repo: Path, tmp_path: Path,
     assert "expected a part model" in capsys.readouterr().err
 
 
-@settings(max_examples=25, deadline=None,
+@settings(max_examples=examples(25),
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(offset=st.floats(-0.02, 0.02), taper=st.floats(-5e-4, 5e-4),
        k=st.integers(1, 12), amplitude=st.floats(0.0, 0.01), phase=st.floats(0.0, 6.3),

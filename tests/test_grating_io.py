@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -92,7 +93,7 @@ def test_level_round_trip_and_z_rejected(tmp_path: Path) -> None:
         read_level(write(tmp_path, bad, "l.csv"))
 
 
-FUZZ = settings(max_examples=150, deadline=2000, suppress_health_check=[
+FUZZ = settings(max_examples=examples(150), suppress_health_check=[
     HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 ALPHABET = "0123456789.,-+eE\n\r\"# XYZLnaif_"
 

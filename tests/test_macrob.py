@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 from conftest import assert_golden
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -781,7 +782,7 @@ def _outcome(text: str, machine: Machine) -> None:
     assert result.stopped in ("M30", "M02", "M99", "end", "message", "alarm")
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.sampled_from(TOKENS), max_size=60), st.lists(st.booleans(), max_size=5))
 def test_random_text_runs_or_fails_cleanly(tokens: list[str], pattern: list[bool]) -> None:
     _outcome("".join(tokens), Chance(pattern))
@@ -808,7 +809,7 @@ def _mutated_golden(draw: st.DrawFn) -> str:
     return "\n".join(lines)
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(60), suppress_health_check=[HealthCheck.too_slow])
 @given(_mutated_golden(), st.lists(st.booleans(), max_size=5))
 def test_mutated_golden_programs_run_or_fail_cleanly(text: str, pattern: list[bool]) -> None:
     _outcome(text, Chance(pattern))

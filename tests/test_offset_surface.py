@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.typing import ArrayLike
@@ -435,7 +436,7 @@ def problems(draw: st.DrawFn) -> tuple[BSplineSurface, np.ndarray, np.ndarray, f
     return surf, origins, directions, radius, seeds
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(80), suppress_health_check=[HealthCheck.too_slow])
 @given(problems(), st.sampled_from([1.0, -1.0]))
 def test_solver_ends_in_a_result_or_a_probegen_error(
         problem: tuple[BSplineSurface, np.ndarray, np.ndarray, float, np.ndarray],
@@ -457,7 +458,7 @@ def test_solver_ends_in_a_result_or_a_probegen_error(
         assert res.message(i).startswith(f"guide line {i}: ")
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100))
 @given(st.lists(finite, min_size=0, max_size=30), st.integers(-1, 4), st.integers(-1, 6))
 def test_bspline_constructor_ends_in_a_surface_or_a_model_error(
         values: list[float], degree: int, n: int) -> None:
@@ -472,7 +473,7 @@ def test_bspline_constructor_ends_in_a_surface_or_a_model_error(
     assert np.all(np.isfinite(surf.evaluate([u0, u1], [0.5, 0.5])))
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(60), suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(0, 2 ** 32 - 1), st.integers(1, 3), st.booleans(),
        st.sampled_from([0.0, 1.0, 5.0]))
 def test_solver_on_random_rational_surfaces(seed: int, degree: int, rational: bool,

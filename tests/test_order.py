@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -100,7 +101,7 @@ coordinate = st.floats(-100.0, 100.0, allow_nan=False, allow_infinity=False)
 point = st.tuples(coordinate, coordinate, st.floats(0.0, 40.0))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60))
 @given(entries=st.lists(point, min_size=1, max_size=12), data=st.data(),
        straight=st.booleans(), with_start=st.booleans())
 def test_improvement_never_worsens_nearest_neighbour(entries: list[tuple[float, float, float]],

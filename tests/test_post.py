@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, SHARED, assert_golden
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -288,7 +289,7 @@ TEXTS = [SIMPLE.program.read_text(), DCX.program.read_text(), PROGRAM.format(bal
 ALPHABET = "ACDEFGILMNOPRSTUXYZ0123456789.,-+/=()$' \n"
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_mutated_dmis_posts_or_fails_cleanly(data: st.DataObject) -> None:
     source = data.draw(st.sampled_from(TEXTS))
@@ -301,7 +302,7 @@ def test_mutated_dmis_posts_or_fails_cleanly(data: st.DataObject) -> None:
     get_dialect("fanuc").generate(out.program)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60))
 @given(st.text(ALPHABET, max_size=200))
 def test_random_dmis_posts_or_fails_cleanly(text: str) -> None:
     try:
@@ -317,7 +318,7 @@ SIMPLE_LOG = ("PGSTART O1001 V1\nPT ACIRCLE 1 X73.0000 Y50.0000 Z40.0000\n"
               "PT ACIRCLE 4 X50.0000 Y27.0000 Z40.0000\nPGEND O1001\n")
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_mutated_feature_map_and_log_evaluate_or_fail_cleanly(data: st.DataObject) -> None:
     fmap_text = SIMPLE_MAP

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -279,7 +280,7 @@ def mutated_decisions(draw: st.DrawFn) -> str:
     return mutate(draw, DECISIONS_JSON, '0123456789.-,:"[]{}ntrufals')
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150))
 @given(mutated_decisions())
 def test_mutated_decisions_give_a_page_or_a_probegen_error(text: str) -> None:
     try:

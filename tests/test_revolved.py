@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from build123d import Align, Box, Cylinder, Pos, export_step
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -255,7 +256,7 @@ def _closest_to_axis(a: np.ndarray, b: np.ndarray, section: Section) -> float:
     return float(np.linalg.norm(radial, axis=1).min())
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(40))
 @given(radius=st.floats(2.0, 80.0), ball=st.floats(0.5, 4.0), retract=st.floats(0.6, 6.0),
        n=st.integers(1, 24))
 def test_outer_chords_clear_the_offset_circle(radius: float, ball: float, retract: float,

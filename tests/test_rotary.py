@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import test_linuxcnc
 from conftest import REPO, assert_golden
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -201,7 +202,7 @@ def mutated(draw: st.DrawFn) -> str:
     return mutate(draw, spec_text(draw(st.sampled_from(SAMPLES))), '[]="=.,-0123456789az \n')
 
 
-@settings(max_examples=100, deadline=None,
+@settings(max_examples=examples(100),
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(mutated())
 def test_mutated_specs_end_in_a_plan_or_a_probegen_error(tmp_path: Path, text: str) -> None:

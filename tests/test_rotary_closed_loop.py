@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import mutate
@@ -206,7 +207,7 @@ def mutated_log(draw: st.DrawFn) -> str:
     return mutate(draw, m4_log(), "0123456789.- XYZ\n", most=4)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60))
 @given(mutated_log())
 def test_mutated_logs_end_in_a_result_or_a_probegen_error(text: str) -> None:
     try:

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO
+from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -98,7 +99,7 @@ def mutated(draw: st.DrawFn) -> str:
     return text
 
 
-@settings(max_examples=150, deadline=None,
+@settings(max_examples=examples(150),
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(mutated())
 def test_mutated_action_specs(tmp_path: Path, text: str) -> None:
