@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 
 from probegen.compensate import ProbeCalibration
 from probegen.geometry.fits import SphereFit, fit_sphere
+from probegen.uncertainty import COVERAGE_FACTOR, Budget, decide, verdict
 
 Vec3 = tuple[float, float, float]
 
@@ -34,6 +35,8 @@ class Characteristic:
         deviation: measured − nominal, mm.
         lower: lowest allowed deviation, or None when not toleranced.
         upper: highest allowed deviation, or None.
+        u: standard uncertainty of the value, same unit, or None when not estimated
+            (``probegen.uncertainty`` says how it is found).
     """
 
     name: str
@@ -42,6 +45,22 @@ class Characteristic:
     deviation: float
     lower: float | None = None
     upper: float | None = None
+    u: float | None = None
+
+    @property
+    def U(self) -> float | None:
+        """Expanded uncertainty ``k·u`` (``k = 2``), or None."""
+        return None if self.u is None else COVERAGE_FACTOR * self.u
+
+    @property
+    def decision(self) -> str | None:
+        """ISO 14253-1: ``conforming``, ``non-conforming`` or ``undecided`` (the value lies
+        within ``U`` of a limit); None when not toleranced."""
+        return decide(self.deviation, self.lower, self.upper, self.u)
+
+    def accepted(self, rule: str = "simple") -> bool | None:
+        """The verdict under ``rule`` (``simple``: ``ok``; ``guard_band``: conforming)."""
+        return verdict(self.ok, self.decision, rule)
 
     @property
     def ok(self) -> bool | None:
@@ -100,7 +119,8 @@ class SphereTestResult:
 def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,
                          nominal_centre: Vec3, calibrated_diameter: float, ball_radius: float,
                          form: float | None = None, size: float | None = None,
-                         position: float | None = None) -> SphereTestResult:
+                         position: float | None = None,
+                         budget: Budget | None = None) -> SphereTestResult:
     """Evaluate the sphere test from compensated contact points.
 
     Args:
@@ -113,6 +133,8 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         form: limit of P_FTU, or None.
         size: limit of |P_STU|, or None.
         position: limit of the centre's distance from nominal, or None.
+        budget: the stated uncertainty contributions (``budget.radius``: of the radius
+            the points were compensated with); default none stated.
 
     Returns:
         The result with its characteristics.
@@ -135,6 +157,14 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         Characteristic("R_EFF", ball_radius + fit.radius - r_cal, ball_radius,
                        fit.radius - r_cal),
     ]
+    from probegen.evaluate_uncertainty import FittedShape, uncertainties
+
+    shape = FittedShape("sphere", np.asarray(fit.centre), np.array([0.0, 0.0, 1.0]),
+                        fit.radius, 0.0)
+    chars = list(uncertainties(shape, p, np.zeros(len(p), dtype=np.int64), tuple(chars),
+                               nominal_centre=np.asarray(nominal_centre, dtype=np.float64),
+                               nominal_axis=None, budget=budget or Budget(),
+                               position_factor=1.0))
     return SphereTestResult(
         feature=feature, fit=fit, points=_tuples(p), directions=_tuples(directions),
         nominal_centre=nominal_centre, calibrated_diameter=calibrated_diameter,

@@ -61,9 +61,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
+from probegen.evaluate_uncertainty import FittedShape, uncertainties
 from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
 from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
 from probegen.geometry.frames import rotation_to_z
+from probegen.uncertainty import Budget
 
 Vec3 = tuple[float, float, float]
 Array = NDArray[np.float64]
@@ -178,7 +180,7 @@ class _Fit:
 
 def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
                       sections: ArrayLike, *, ball_radius: float,
-                      limits: Limits) -> RevolvedResult:
+                      limits: Limits, budget: Budget | None = None) -> RevolvedResult:
     """Fit and evaluate one revolved feature from its ball centres.
 
     Args:
@@ -188,6 +190,8 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         sections: (n,) 0-based section of each touch (into ``nominal.sections``).
         ball_radius: the stylus ball radius to offset by, mm.
         limits: the feature's tolerances.
+        budget: the stated uncertainty contributions (default: none stated); every
+            characteristic gets its ``u`` (``probegen.evaluate_uncertainty``).
 
     Raises:
         ProbegenError: the touches lie in too few sections for the kind, or the fit
@@ -221,6 +225,16 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         raise ProbegenError(f"feature {feature}: expected touches that determine the "
                             f"{nominal.kind}, found a fit with non-finite "
                             f"{', '.join(bad) or 'contact points'} (a touch on its axis?)")
+    shape = FittedShape(
+        nominal.kind, fit.centre, fit.axis,
+        fit.diameter / 2.0 - sign * ball_radius / math.cos(fit.half_angle or 0.0),
+        sign * ball_radius, half_angle=fit.half_angle or 0.0,
+        major_radius=(fit.major_diameter or 0.0) / 2.0,
+        gauges=tuple((np.asarray(s, dtype=np.float64), v0) for s, _ in nominal.sections))
+    chars = list(uncertainties(
+        shape, c, k, tuple(chars), nominal_centre=np.asarray(nominal_xyz, dtype=np.float64),
+        nominal_axis=None if nominal.kind == "sphere" else v0,
+        budget=budget or Budget()))
     return RevolvedResult(
         feature=feature, kind=nominal.kind, centre=_v(fit.centre), axis=_v(fit.axis),
         diameter=fit.diameter, form=fit.form, points=tuple(_v(p) for p in points),
