@@ -136,7 +136,8 @@ def fit_covariance(residuals: Callable[[Array], Array], size: int, budget: Budge
     few = dof < FEW_DOF
     if few:
         sigma = max(sigma, budget.u_probe)
-    return FitCovariance(sigma**2 * np.linalg.pinv(jac.T @ jac), sigma, dof, few)
+    cov = np.asarray(sigma**2 * np.linalg.pinv(jac.T @ jac), dtype=np.float64)
+    return FitCovariance(cov, sigma, dof, few)
 
 
 def propagate(func: Callable[[Array], Array], fit: FitCovariance) -> Array:
