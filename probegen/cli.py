@@ -20,6 +20,7 @@ from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _targe
 from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report
 from probegen.errors import ProbegenError
+from probegen.uncertainty import DECISION_RULES
 
 
 def _sim(args: argparse.Namespace) -> int:
@@ -186,6 +187,9 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--calibration", help="probe calibration file to compensate with")
     i.add_argument("--write-calibration", metavar="FILE",
                    help="write the probe calibration a sphere test measured")
+    i.add_argument("--decision-rule", choices=DECISION_RULES,
+                   help="ISO 14253-1 decision rule: simple acceptance or guard_band by U "
+                        "(default: the spec's [evaluation] decision_rule, else simple)")
     i.set_defaults(func=_ingest)
 
     cp = sub.add_parser("capture", help="record what the machine sends on a serial port")
@@ -229,6 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--spec", help="the spec a DPRNT log's program was compiled from")
     q.add_argument("--calibration", help="probe calibration to compensate with")
     q.add_argument("--program", help="the DMIS program, for its T() tolerance limits")
+    q.add_argument("--decision-rule", choices=DECISION_RULES,
+                   help="ISO 14253-1 decision rule of a DPRNT log's results (as ingest)")
     q.add_argument("--strict", action="store_true", help="refuse output with diagnostics")
     q.add_argument("--validate", action="store_true", help="validate against the schema")
     q.add_argument("--schema", help="QIFDocument.xsd (default: $PROBEGEN_QIF_SCHEMA)")

@@ -25,9 +25,10 @@ def _ingest(args: argparse.Namespace) -> int:
     if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
         from probegen.ingest import ingest_dmis
 
-        result = ingest_dmis(args.log, spec)
+        result = ingest_dmis(args.log, spec, decision_rule=args.decision_rule)
     else:
-        result = ingest(args.log, spec, calibration=cal, with_path=True)
+        result = ingest(args.log, spec, calibration=cal, with_path=True,
+                        decision_rule=args.decision_rule)
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
     for note in result.notes:
@@ -43,10 +44,7 @@ def _ingest(args: argparse.Namespace) -> int:
         target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
                           encoding="utf-8", newline="\n")
         print(f"wrote the probe calibration {target}")
-    failed = (any(r.ok is False for r in result.results)
-              or any(r.ok is False for r in result.revolved)
-              or any(r.ok is False for r in result.freeform))
-    return ExitCode.NOT_OK if failed else ExitCode.OK
+    return ExitCode.OK if result.ok else ExitCode.NOT_OK
 
 
 _PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
@@ -97,7 +95,8 @@ def _qif(args: argparse.Namespace) -> int:
             raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
         spec = load_spec(args.spec)
         cal = load_calibration(args.calibration) if args.calibration else None
-        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal),
+        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal,
+                                             decision_rule=args.decision_rule),
                                       spec=spec), ()
     path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
     for note in notes:

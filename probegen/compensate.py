@@ -19,6 +19,8 @@ Calibration file (TOML, written by ``probegen ingest --write-calibration``)::
     source = "run.log"
     directions = [[0.0, 0.0, 1.0], ...]    # unit vectors, probe frame
     radii = [2.9979, ...]                  # effective radius in each direction, mm
+    u_radius = 0.0002            # standard uncertainty of the effective radius, mm
+                                 # (optional, 0 when absent: files before it)
 """
 
 from __future__ import annotations
@@ -48,6 +50,8 @@ class ProbeCalibration:
         directions: unit vectors where the radius was measured.
         radii: the effective radius in each direction, mm.
         source: where the calibration came from.
+        u_radius: standard uncertainty of the effective radius, mm (from the sphere
+            test's fit; 0 when the file does not state it).
     """
 
     ball_radius: float
@@ -55,6 +59,7 @@ class ProbeCalibration:
     directions: tuple[tuple[float, float, float], ...]
     radii: tuple[float, ...]
     source: str = ""
+    u_radius: float = 0.0
 
     def radius(self, normals: ArrayLike) -> NDArray[np.float64]:
         """Effective radius for each approach normal ``normals : (n, 3)``; returns (n,)."""
@@ -102,6 +107,7 @@ def load_calibration(path: str | Path) -> ProbeCalibration:
         directions=_directions(t, directions),
         radii=_radii(t, radii),
         source=t.get_str("source", "") or "",
+        u_radius=t.get_float("u_radius", 0.0, minimum=0.0, maximum=1.0) or 0.0,
     )
     if len(cal.directions) != len(cal.radii):
         raise SpecError(f"{t.where('radii')}: expected one radius per direction "
@@ -145,6 +151,7 @@ def calibration_toml(cal: ProbeCalibration) -> str:
         f"source = {_quote(cal.source)}\n"
         f"directions = [\n    {dirs},\n]\n"
         f"radii = [{radii}]\n"
+        f"u_radius = {cal.u_radius:.7f}\n"
     )
 
 

@@ -111,9 +111,11 @@ class SphereTestResult:
         return all(checks) if checks else None
 
     def calibration(self, source: str = "") -> ProbeCalibration:
-        """The probe calibration this test measured."""
+        """The probe calibration this test measured (``u_radius``: the standard
+        uncertainty of ``R_EFF``)."""
+        u = next((c.u for c in self.characteristics if c.name == "R_EFF"), None)
         return ProbeCalibration(self.ball_radius, self.effective_radius, self.directions,
-                                self.radii, source)
+                                self.radii, source, u or 0.0)
 
 
 def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,

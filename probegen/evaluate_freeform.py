@@ -26,6 +26,7 @@ from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
 from probegen.spec import FREEFORM_EXTRA as EXTRA
 from probegen.spec import FREEFORM_STRIDE as STRIDE
+from probegen.uncertainty import Budget, combine
 
 Vec3 = tuple[float, float, float]
 Touches = Mapping[tuple[str, int], Vec3]
@@ -93,7 +94,8 @@ def complete_guides(feature: str, method: str, nominal: Sequence[NominalPoint],
 def evaluate_freeform(feature: str, method: str, nominal: Sequence[NominalPoint],
                       touches: Touches, *, direction: Vec3,
                       radius: float | ProbeCalibration,
-                      deviation: tuple[float, float] | None = None) -> FreeformResult:
+                      deviation: tuple[float, float] | None = None,
+                      budget: Budget | None = None) -> FreeformResult:
     """Compensate the touches of every complete guide point and evaluate the deviations.
 
     Args:
@@ -106,6 +108,8 @@ def evaluate_freeform(feature: str, method: str, nominal: Sequence[NominalPoint]
             travel along its opposite).
         radius: ball radius, mm, or the probe calibration.
         deviation: allowed ``[lower, upper]`` deviation along the normal, mm.
+        budget: the stated uncertainty contributions: each deviation is one touch, so
+            its ``u`` combines the probe's, the machine's and the radius's (no fit).
 
     Raises:
         ProbegenError: no guide point, or touches from which no normal follows.
@@ -130,7 +134,9 @@ def evaluate_freeform(feature: str, method: str, nominal: Sequence[NominalPoint]
         comp = cf.naive(centres, radius, probe_direction=travel)
     dmap = cf.deviation_map(comp, p_t, n_t)
     lo, hi = deviation if deviation is not None else (None, None)
-    chars = tuple(Characteristic(f"E{p.guide}", float(e), 0.0, float(e), lo, hi)
+    b = budget or Budget()
+    u = combine(b.u_probe, b.u_machine, b.radius)
+    chars = tuple(Characteristic(f"E{p.guide}", float(e), 0.0, float(e), lo, hi, u)
                   for p, e in zip(nominal, dmap.deviation, strict=True))
     return FreeformResult(
         feature, method, tuple(p.guide for p in nominal), _rows(p_t), _rows(comp.contacts),

@@ -25,7 +25,7 @@ import numpy as np
 
 from probegen.compensate import ProbeCalibration, compensate
 from probegen.errors import ProbegenError
-from probegen.evaluate import SphereTestResult, evaluate_sphere_test
+from probegen.evaluate import Characteristic, SphereTestResult, evaluate_sphere_test
 from probegen.evaluate_freeform import (
     FreeformResult,
     NominalPoint,
@@ -44,6 +44,7 @@ from probegen.ingest_actions import Decision, decisions
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
+from probegen.uncertainty import COVERAGE_FACTOR, Budget
 
 Vec3 = tuple[float, float, float]
 
@@ -70,6 +71,8 @@ class Ingested:
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
         freeform: one evaluated result per free-form feature with touches.
+        rule: the ISO 14253-1 decision rule of the verdicts (``simple``, ``guard_band``).
+        budget: the stated uncertainty contributions the characteristics' ``u`` used.
     """
 
     source: str
@@ -80,14 +83,39 @@ class Ingested:
     revolved: tuple[RevolvedResult, ...] = ()
     decisions: tuple[Decision, ...] = ()
     freeform: tuple[FreeformResult, ...] = ()
+    rule: str = "simple"
+    budget: Budget = Budget()
+
+    @property
+    def ok(self) -> bool:
+        """No evaluated feature fails its verdict under ``rule``."""
+        rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
+            *self.results, *self.revolved, *self.freeform]
+        return not any(accepted(r.characteristics, self.rule) is False for r in rs)
+
+
+def budget_of(spec: Spec, calibration: ProbeCalibration | None) -> Budget:
+    """The stated uncertainty contributions: the profile's and the calibration's."""
+    stated = spec.machine.uncertainty
+    return Budget(0.0 if calibration is None else calibration.u_radius, stated.machine,
+                  stated.probe)
+
+
+def accepted(characteristics: Sequence[Characteristic], rule: str) -> bool | None:
+    """A feature's verdict under ``rule``: None when nothing is toleranced."""
+    checks = [c.accepted(rule) for c in characteristics]
+    found = [c for c in checks if c is not None]
+    return all(found) if found else None
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
-           calibration: ProbeCalibration | None = None, with_path: bool = False) -> Ingested:
+           calibration: ProbeCalibration | None = None, with_path: bool = False,
+           decision_rule: str | None = None) -> Ingested:
     """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for.
 
     ``with_path`` also plans the whole program again (with its collision check) to
-    record the nominal stylus path for the report.
+    record the nominal stylus path for the report.  ``decision_rule`` overrides the
+    spec's ``[evaluation] decision_rule``.
     """
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
@@ -100,9 +128,10 @@ def ingest(log_path: str | Path, spec: Spec, *,
     results = []
     revolved: list[RevolvedResult] = []
     freeform: list[FreeformResult] = []
+    budget = budget_of(spec, calibration)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            found_r = _revolved(feature, spec, touches, notes)
+            found_r = _revolved(feature, spec, touches, notes, budget)
             if found_r is not None:
                 revolved.append(found_r)
             continue
@@ -132,7 +161,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
             feature.id, points, normals, nominal_centre=sphere.centre,
             calibrated_diameter=sphere.diameter,
             ball_radius=r if isinstance(r, float) else r.effective_radius,
-            form=tol.form, size=tol.size, position=tol.position))
+            form=tol.form, size=tol.size, position=tol.position, budget=budget))
     if not results and not revolved and not freeform:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
@@ -143,7 +172,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
     return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
-                    decisions(spec, log), tuple(freeform))
+                    decisions(spec, log), tuple(freeform), decision_rule or spec.decision_rule,
+                    budget)
 
 
 def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
@@ -170,7 +200,8 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
     r = spec.machine.probe.ball_radius if calibration is None else calibration
     return evaluate_freeform(feature.id, feature.method, full, touches,
                              direction=feature.direction, radius=r,
-                             deviation=feature.deviation)
+                             deviation=feature.deviation,
+                             budget=budget_of(spec, calibration))
 
 
 def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
@@ -192,7 +223,7 @@ def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
     return out
 
 
-def ingest_dmis(path: str | Path, spec: Spec) -> Ingested:
+def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = None) -> Ingested:
     """``probegen ingest`` of a DMIS output file: the free-form features of ``spec``
     (the CMM reports the other kinds itself; ``probegen qif`` exports them).
 
@@ -208,7 +239,8 @@ def ingest_dmis(path: str | Path, spec: Spec) -> Ingested:
         raise ProbegenError(f"{path}: expected point actuals FA(<id>_<k>) of the spec's "
                             "free-form features, found none usable; " + "; ".join(notes))
     log = DprntLog(str(path), None, (), (), (), bool(output.features), 0, output.diagnostics)
-    return Ingested(str(path), log, (), notes, freeform=results)
+    return Ingested(str(path), log, (), notes, freeform=results,
+                    rule=decision_rule or spec.decision_rule, budget=budget_of(spec, None))
 
 
 def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[FreeformResult, ...],
@@ -223,7 +255,7 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Freeform
 
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
-              notes: list[str]) -> RevolvedResult | None:
+              notes: list[str], budget: Budget) -> RevolvedResult | None:
     """Evaluate a revolved feature from its touches (too few, or a failed fit: a note)."""
     from probegen.planning.revolved_spec import plan_revolved
 
@@ -243,7 +275,8 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], 
     try:
         return evaluate_revolved(
             feature.id, nominal_of(plan), [touches[(feature.id, k)] for k in found], which,
-            ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance)
+            ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance,
+            budget=budget)
     except ProbegenError as exc:
         notes.append(f"feature {feature.id}: not evaluated: {exc}")
         return None
@@ -287,9 +320,10 @@ def to_json(ing: Ingested) -> str:
         "complete": ing.log.complete,
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
-        "features": [_feature_json(r) for r in ing.results]
-        + [_revolved_json(r) for r in ing.revolved]
-        + [freeform_json(r) for r in ing.freeform],
+        "uncertainty": uncertainty_json(ing.budget, ing.rule),
+        "features": [_feature_json(r, ing.rule) for r in ing.results]
+        + [_revolved_json(r, ing.rule) for r in ing.revolved]
+        + [freeform_json(r, ing.rule) for r in ing.freeform],
         "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
                   "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
@@ -302,15 +336,29 @@ def to_json(ing: Ingested) -> str:
     return json.dumps(doc, indent=2) + "\n"
 
 
+def uncertainty_json(budget: Budget, rule: str) -> dict[str, Any]:
+    """The ``uncertainty`` object of ``results.json``: coverage factor, decision rule and
+    the stated contributions (None: not stated), with what they leave out."""
+    return {"k": COVERAGE_FACTOR, "decision_rule": rule, "u_radius": _f(budget.radius),
+            "machine": None if budget.machine is None else _f(budget.machine),
+            "probe": None if budget.probe is None else _f(budget.probe),
+            "notes": list(budget.notes())}
+
+
+def _opt_f(x: float | None) -> float | None:
+    return None if x is None else _f(x)
+
+
 def _measured_json(characteristics: Any, points: Any, directions: Any,
-                   residuals: Any) -> dict[str, Any]:
-    """The part of a feature's JSON every kind shares: checks, points, normals, residuals."""
+                   residuals: Any, rule: str) -> dict[str, Any]:
+    """The part of a feature's JSON every kind shares: checks (``ok`` is the verdict under
+    ``rule``), points, normals, residuals."""
     return {
         "characteristics": [
             {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
              "deviation": _f(c.deviation),
-             "lower": None if c.lower is None else _f(c.lower),
-             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
+             "lower": _opt_f(c.lower), "upper": _opt_f(c.upper), "ok": c.accepted(rule),
+             "u": _opt_f(c.u), "U": _opt_f(c.U), "decision": c.decision}
             for c in characteristics
         ],
         "points": [[_f(v) for v in p] for p in points],
@@ -319,26 +367,26 @@ def _measured_json(characteristics: Any, points: Any, directions: Any,
     }
 
 
-def _feature_json(r: SphereTestResult) -> dict[str, Any]:
+def _feature_json(r: SphereTestResult, rule: str) -> dict[str, Any]:
     return {
         "id": r.feature,
         "kind": "sphere_test",
-        "ok": r.ok,
+        "ok": accepted(r.characteristics, rule),
         "n": len(r.points),
         "centre": [_f(v) for v in r.fit.centre],
         "diameter": _f(2.0 * r.fit.radius),
         "p_ftu": _f(r.p_ftu),
         "p_stu": _f(r.p_stu),
         "effective_radius": _f(r.effective_radius),
-        **_measured_json(r.characteristics, r.points, r.directions, r.fit.residuals),
+        **_measured_json(r.characteristics, r.points, r.directions, r.fit.residuals, rule),
     }
 
 
-def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
+def _revolved_json(r: RevolvedResult, rule: str) -> dict[str, Any]:
     return {
         "id": r.feature,
         "kind": r.kind,
-        "ok": r.ok,
+        "ok": accepted(r.characteristics, rule),
         "n": len(r.points),
         "centre": [_f(v) for v in r.centre],
         "axis": [_f(v) for v in r.axis],
@@ -347,11 +395,11 @@ def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
         **({} if r.half_angle is None else {"half_angle_deg": _f(math.degrees(r.half_angle))}),
         **({} if r.apex is None else {"apex": [_f(v) for v in r.apex]}),
         **({} if r.major_diameter is None else {"major_diameter": _f(r.major_diameter)}),
-        **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
     }
 
 
-def freeform_json(r: FreeformResult) -> dict[str, Any]:
+def freeform_json(r: FreeformResult, rule: str = "simple") -> dict[str, Any]:
     """A free-form feature in ``results.json``: ``points`` are the compensated contact
     points, ``directions`` the nominal normals, ``residuals`` the deviations along them
     (the deviation map), ``nominal`` the theoretical contact points."""
@@ -360,7 +408,7 @@ def freeform_json(r: FreeformResult) -> dict[str, Any]:
         "id": r.feature,
         "kind": "freeform",
         "method": r.method,
-        "ok": r.ok,
+        "ok": accepted(r.characteristics, rule),
         "n": len(r.points),
         "guides": list(r.guides),
         "touch_stride": FREEFORM_STRIDE,
@@ -368,7 +416,7 @@ def freeform_json(r: FreeformResult) -> dict[str, Any]:
                       "rms": _f(s.rms)},
         "nominal": [[_f(v) for v in p] for p in r.nominal],
         "normals_used": [[_f(v) for v in n] for n in r.normals_used],
-        **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
     }
 
 
@@ -389,32 +437,44 @@ def to_csv(ing: Ingested) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
-                "upper", "status"])
+                "upper", "status", "u", "U", "decision"])
     rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
         *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                         f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
-                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok)])
+                        "" if c.upper is None else f"{c.upper:.4f}",
+                        _status(c.accepted(ing.rule)), _num(c.u, "", 5), _num(c.U, "", 4),
+                        c.decision or ""])
     return buf.getvalue()
 
 
 def to_table(ing: Ingested) -> str:
     """The table ``probegen ingest`` prints."""
-    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status")]
+    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status",
+             "U", "decision")]
     rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
         *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
-                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))
+                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper),
+                         _status(c.accepted(ing.rule)), _num(c.U, "-", 4),
+                         c.decision or "-"))
     text = _columns(rows)
+    text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
+             f"{ing.rule} (ISO 14253-1)\n")
+    text += "".join(f"{note}\n" for note in ing.budget.notes())
     if ing.decisions:
         text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
             (d.feature, d.key, _opt(d.offline), _opt(d.machine),
              {None: "-", True: "yes", False: "NO"}[d.agrees]) for d in ing.decisions])
     return text
+
+
+def _num(x: float | None, none: str, digits: int) -> str:
+    return none if x is None else f"{x:.{digits}f}"
 
 
 def _opt(x: float | None) -> str:

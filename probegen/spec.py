@@ -15,6 +15,9 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     number = 1001                  # O-number (Fanuc) / program id
     name = "SPHERE TEST"
 
+    [evaluation]                   # optional
+    decision_rule = "simple"       # simple | guard_band (ISO 14253-1, docs/results.md)
+
     [[feature]]
     id = "SPH1"                    # [A-Z][A-Z0-9]{0,11}, unique
     kind = "sphere_test"
@@ -65,6 +68,7 @@ from probegen.errors import SpecError, did_you_mean
 from probegen.machine.profile import MachineProfile, load_profile
 from probegen.spec_actions import PLANAR_KINDS, Actions, PlanarSpec, read_actions, read_planar
 from probegen.tomlread import Table, load_toml
+from probegen.uncertainty import DECISION_RULES
 
 Vec3 = tuple[float, float, float]
 
@@ -256,6 +260,8 @@ class Spec:
         program_number: O-number / program id.
         program_name: a short upper-case name.
         features: what to measure, in the order given.
+        decision_rule: ISO 14253-1 decision rule of the results (``[evaluation]
+            decision_rule``): ``simple`` acceptance or ``guard_band``.
     """
 
     source: str
@@ -266,6 +272,7 @@ class Spec:
     program_number: int
     program_name: str
     features: tuple[Feature, ...]
+    decision_rule: str = "simple"
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -290,11 +297,18 @@ def load_spec(path: str | Path) -> Spec:
         program_number=prog.get_int("number", 1001, minimum=1, maximum=9999) or 1001,
         program_name=_program_name(prog),
         features=_features(root, k),
+        decision_rule=_decision_rule(root.table("evaluation")),
     )
     m.done()
     prog.done()
     root.done()
     return spec
+
+
+def _decision_rule(t: Table) -> str:
+    rule = t.get_str("decision_rule", "simple", choices=DECISION_RULES) or "simple"
+    t.done()
+    return rule
 
 
 def _machine(t: Table, base: Path) -> MachineProfile:

@@ -78,6 +78,21 @@ DEFAULT_RESET = ("G17", "G40", "G49", "G80", "G94", "G69")
 
 
 @dataclass(frozen=True, slots=True)
+class StatedUncertainty:
+    """The profile's stated contributions to measurement uncertainty (``[uncertainty]``),
+    standard uncertainties in mm, None when the profile does not state one.
+
+    Attributes:
+        machine: the machine's length-measurement contribution (its geometry, scales,
+            thermal state), counted once per characteristic.
+        probe: the probing repeatability per touch.
+    """
+
+    machine: float | None = None
+    probe: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class MachineProfile:
     """A machine as probegen needs to know it."""
 
@@ -91,6 +106,7 @@ class MachineProfile:
     feeds: Feeds
     controller: Controller
     source: str
+    uncertainty: StatedUncertainty = StatedUncertainty()
 
 
 def load_profile(path: str | Path) -> MachineProfile:
@@ -111,6 +127,7 @@ def load_profile(path: str | Path) -> MachineProfile:
         feeds=_feeds(root.table("feeds", required=True), k),
         controller=_controller(root.table("controller")),
         source=file,
+        uncertainty=_uncertainty(root.table("uncertainty"), k),
     )
     m.done()
     root.done()
@@ -141,6 +158,14 @@ def _feeds(t: Table, k: float) -> Feeds:
     )
     t.done()
     return feeds
+
+
+def _uncertainty(t: Table, k: float) -> StatedUncertainty:
+    machine = t.get_float("machine", minimum=0.0, maximum=1.0)
+    probe = t.get_float("probe", minimum=0.0, maximum=1.0)
+    t.done()
+    return StatedUncertainty(None if machine is None else k * machine,
+                             None if probe is None else k * probe)
 
 
 def _controller(t: Table) -> Controller:
