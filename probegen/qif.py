@@ -1,7 +1,8 @@
 """QIF 3 results export: ``probegen qif`` (see ``docs/qif.md``).
 
-* :func:`ingested_to_qif`: the sphere test's results (``probegen ingest``) as a QIF
-  document: features, measured points, characteristics and their statuses.
+* :func:`ingested_to_qif`: the results of ``probegen ingest`` (sphere tests, circles,
+  cylinders, cones, spheres, tori, free-form points) as a QIF document: features,
+  measured points, characteristics, their statuses and standard uncertainties.
 * :func:`dmis_output_to_qif`: a DMIS output file's feature and tolerance actuals as a QIF
   document, with a list of what could not be converted.
 * :func:`validate_qif`: check a document against the QIF 3 XSD set, keys and keyrefs
@@ -67,7 +68,7 @@ def ingested_to_qif(ing: Ingested, *, spec: Spec | None = None,
     """The results of ``probegen ingest`` as a QIF 3 document.
 
     Args:
-        ing: the ingest (one sphere test result per evaluated feature).
+        ing: the ingest (every evaluated feature; its decision rule sets the statuses).
         spec: the spec it was ingested with: names the machine and the part model and
             describes the probe (ball and shank diameter, length); without it the probe
             is described by the ball radius the points were compensated with.
@@ -83,7 +84,7 @@ def ingested_to_qif(ing: Ingested, *, spec: Spec | None = None,
     """
     from probegen.qif_sphere import sphere_results_qif
 
-    if not ing.results:
+    if not (ing.results or ing.revolved or ing.freeform):
         raise ProbegenError(f"{ing.source}: expected evaluated features to export, found none")
     return sphere_results_qif(ing, spec=spec, application=APPLICATION,
                               version=_version(version), created=created, qpid=qpid)

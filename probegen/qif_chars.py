@@ -10,14 +10,17 @@ feature).  :func:`add_characteristic` writes all four from one :class:`Check`.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-from probegen.qif_xml import QifBuilder, num, ref_list, sub
+from probegen.qif_xml import QifBuilder, num, ref_list, sub, vec
 
-SIZE_KINDS = frozenset({"Diameter", "SphericalDiameter"})
-"""Size characteristics: a target value and a bilateral tolerance on the deviation."""
+SIZE_KINDS = frozenset({"Diameter", "SphericalDiameter", "Angle"})
+"""Size characteristics: a target value and a bilateral tolerance on the deviation
+(``Angle``: in the file's angular unit, degrees)."""
 
-ZONE_KINDS = frozenset({"Flatness", "Cylindricity", "Circularity", "Sphericity", "Position"})
+ZONE_KINDS = frozenset({"Flatness", "Cylindricity", "Circularity", "Sphericity", "Position",
+                        "Conicity", "Toroidicity", "PointProfile"})
 """Geometric characteristics: a tolerance zone (QIF requires its value)."""
 
 ZONE_SHAPES = ("SphericalZone", "DiametricalZone")
@@ -40,6 +43,8 @@ class Check:
         zone: the tolerance zone (zone kinds).
         zone_shape: the position zone, one of :data:`ZONE_SHAPES`.
         material: the position's material condition (QIF ``MaterialModifierEnum``).
+        u: the value's combined standard uncertainty (QIF ``combinedUncertainty``, with
+            ``meanError`` 0: the value is corrected for every known error), or None.
     """
 
     kind: str
@@ -52,6 +57,7 @@ class Check:
     zone: float | None = None
     zone_shape: str = "DiametricalZone"
     material: str = "NONE"
+    u: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,4 +140,20 @@ def _measurement(b: QifBuilder, check: Check, item: int, links: Links) -> None:
     sub(element, "CharacteristicItemId", str(item))
     if links.feature_measurement is not None:
         ref_list(element, "FeatureMeasurementIds", [links.feature_measurement])
-    sub(element, "Value", num(check.value))
+    measured_value(element, "Value", check.value, check.u)
+
+
+def measured_point(parent: ET.Element, tag: str, xyz: Sequence[float],
+                   u: Sequence[float | None]) -> ET.Element:
+    """A QIF measured point ``<tag>`` with ``x/y/zCombinedUncertainty`` where known."""
+    attrs = {f"{axis}CombinedUncertainty": num(v)
+             for axis, v in zip("xyz", u, strict=True) if v is not None}
+    return sub(parent, tag, vec(xyz), **attrs)
+
+
+def measured_value(parent: ET.Element, tag: str, value: float, u: float | None) -> ET.Element:
+    """A QIF measured decimal ``<tag>``, with ``combinedUncertainty`` and ``meanError`` (0)
+    when ``u`` is known (QIF wants both or neither)."""
+    if u is None:
+        return sub(parent, tag, num(value))
+    return sub(parent, tag, num(value), combinedUncertainty=num(u), meanError=num(0.0))

@@ -19,7 +19,14 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from probegen.qif_chars import Check, Links, add_characteristic, status
+from probegen.qif_chars import (
+    Check,
+    Links,
+    add_characteristic,
+    measured_point,
+    measured_value,
+    status,
+)
 from probegen.qif_xml import (
     QifBuilder,
     attributes,
@@ -40,6 +47,9 @@ STANDARD = ("ISO", "ISO 10360-5", "Acceptance and reverification tests for coord
             "measuring systems - Part 5: Coordinate measuring machines using single and "
             "multiple stylus contacting probing systems")
 """The formal standard of the sphere test's characteristics."""
+GPS_STANDARD = ("ISO", "ISO 1101", "Geometrical product specifications (GPS) - Geometrical "
+                "tolerancing - Tolerances of form, orientation, location and run-out")
+"""The formal standard of a document without a sphere test."""
 
 _POINTS_DEPTH = 6
 """Depth of ``Points`` below the root (Results/Set/MeasurementResults/PointSets/Set)."""
@@ -55,19 +65,32 @@ class _Resources:
 
 def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, version: str,
                        created: datetime | None, qpid: str | None) -> str:
-    """Build the QIF text of an ingest (see :func:`probegen.qif.ingested_to_qif`)."""
+    """Build the QIF text of an ingest (see :func:`probegen.qif.ingested_to_qif`): the
+    sphere tests here, the other kinds by :mod:`probegen.qif_features`."""
+    from probegen.qif_features import freeform_qif, revolved_qif
+
     b = QifBuilder(application, version, created, qpid)
-    begin_document(b, standard=STANDARD, source=ing.source, source_kind="DPRNT log")
-    b.notes += list(ing.notes)
+    begin_document(b, standard=STANDARD if ing.results else GPS_STANDARD, source=ing.source,
+                   source_kind="DPRNT log")
+    b.notes += [*ing.notes, *ing.budget.notes(),
+                f"uncertainty: combinedUncertainty is the standard uncertainty u; the "
+                f"expanded U = 2u; decision rule {ing.rule} (ISO 14253-1)"]
     resources = _resources(b, ing, spec)
     part = _part(b, spec)
     nominals: list[int] = []
     characteristic_nominals: list[int] = []
     for result in ing.results:
-        nominal, chars = _sphere(b, result, resources)
+        nominal, chars = _sphere(b, result, resources, ing.rule)
         nominals.append(nominal)
         characteristic_nominals += chars
-    ref_list(part, "FeatureNominalIds", nominals)
+    for revolved in ing.revolved:
+        characteristic_nominals += revolved_qif(b, revolved, resources.device,
+                                                resources.sensor, ing.rule)
+    for freeform in ing.freeform:
+        characteristic_nominals += freeform_qif(b, freeform, resources.device,
+                                                resources.sensor, ing.rule)
+    if nominals:
+        ref_list(part, "FeatureNominalIds", nominals)
     if characteristic_nominals:
         ref_list(part, "CharacteristicNominalIds", characteristic_nominals)
     return b.to_text()
@@ -90,7 +113,8 @@ def _resources(b: QifBuilder, ing: Ingested, spec: Spec | None) -> _Resources:
         _tip(probe, p.ball_diameter, p.shank_diameter)
     else:
         sub(probe, "Name", "touch-trigger probe")
-        _tip(probe, 2.0 * ing.results[0].ball_radius, None)
+        if ing.results:
+            _tip(probe, 2.0 * ing.results[0].ball_radius, None)
     b.single("MeasurementResources", section)
     return _Resources(device_id, sensor_id)
 
@@ -113,7 +137,8 @@ def _part(b: QifBuilder, spec: Spec | None) -> ET.Element:
     return part
 
 
-def _sphere(b: QifBuilder, r: SphereTestResult, res: _Resources) -> tuple[int, list[int]]:
+def _sphere(b: QifBuilder, r: SphereTestResult, res: _Resources,
+            rule: str) -> tuple[int, list[int]]:
     """Write one sphere; return its feature nominal id and characteristic nominal ids."""
     definition, def_id = b.add("FeatureDefinitions", "SphereFeatureDefinition")
     sub(definition, "InternalExternal", "EXTERNAL")
@@ -128,7 +153,7 @@ def _sphere(b: QifBuilder, r: SphereTestResult, res: _Resources) -> tuple[int, l
     points_id = _point_set(b, r, res)
     measured_id = _measurement(b, r, item_id, points_id)
     links = Links(nominal_id, item_id, measured_id, res.device)
-    return nominal_id, [add_characteristic(b, check, links) for check in _checks(r)]
+    return nominal_id, [add_characteristic(b, check, links) for check in _checks(r, rule)]
 
 
 def _point_set(b: QifBuilder, r: SphereTestResult, res: _Resources) -> int:
@@ -150,29 +175,32 @@ def _measurement(b: QifBuilder, r: SphereTestResult, item_id: int, points_id: in
     sub(element, "FeatureItemId", str(item_id))
     sub(element, "FeatureName", r.feature)
     sub(sub(element, "PointList", n="1"), "WholePointSetId", str(points_id))
-    sub(element, "Location", vec(r.fit.centre))
-    sub(element, "Diameter", num(2.0 * r.fit.radius))
-    sub(element, "Form", num(r.p_ftu))
+    u = {c.name: c.u for c in r.characteristics}
+    measured_point(element, "Location", r.fit.centre, (u["X"], u["Y"], u["Z"]))
+    measured_value(element, "Diameter", 2.0 * r.fit.radius, u["D"])
+    measured_value(element, "Form", r.p_ftu, u["P_FTU"])
     return ident
 
 
-def _checks(r: SphereTestResult) -> list[Check]:
+def _checks(r: SphereTestResult, rule: str) -> list[Check]:
     """The characteristics of one sphere: diameter always, form and position if toleranced."""
     by_name = {c.name: c for c in r.characteristics}
     d = by_name["D"]
-    checks = [Check("SphericalDiameter", f"{r.feature} D", d.measured, status(d.ok),
-                    target=d.nominal, lower=d.lower, upper=d.upper)]
+    checks = [Check("SphericalDiameter", f"{r.feature} D", d.measured,
+                    status(d.accepted(rule)), target=d.nominal, lower=d.lower, upper=d.upper,
+                    u=d.u)]
     form = by_name["P_FTU"]
     if form.upper is not None:
         checks.append(Check("Sphericity", f"{r.feature} P_FTU", form.measured,
-                            status(form.ok), zone=form.upper))
-    checks += _position(r.feature, by_name["POS"])
+                            status(form.accepted(rule)), zone=form.upper, u=form.u))
+    checks += _position(r.feature, by_name["POS"], rule)
     return checks
 
 
-def _position(feature: str, pos: Characteristic) -> list[Check]:
+def _position(feature: str, pos: Characteristic, rule: str) -> list[Check]:
     """The position check, as a spherical zone diameter (twice the centre distance)."""
     if pos.upper is None:
         return []
-    return [Check("Position", f"{feature} POS", 2.0 * pos.measured, status(pos.ok),
-                  zone=2.0 * pos.upper, zone_shape="SphericalZone", material="NONE")]
+    return [Check("Position", f"{feature} POS", 2.0 * pos.measured, status(pos.accepted(rule)),
+                  zone=2.0 * pos.upper, zone_shape="SphericalZone", material="NONE",
+                  u=None if pos.u is None else 2.0 * pos.u)]
