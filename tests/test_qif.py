@@ -312,7 +312,7 @@ def _sphere_text(sphere: Ingest) -> str:
      r"value 12 not found for key .*CharacteristicNominal"),
     ("<WholePointSetId>10</", "<WholePointSetId>11</",
      r"WholePointSetId 11 names no MeasuredPointSet of these results"),
-    ("<Diameter>24.9991907</Diameter>", "<Diameter>big</Diameter>",
+    (">24.9991907</Diameter>", ">big</Diameter>",
      r"invalid value 'big' for xs:decimal \(at .*SphereFeatureMeasurement/Diameter\)"),
     ('idMax="15"', 'idMax="14"', r"id 15 exceeds the document's idMax 14 \(at "
      r"/QIFDocument/Results/.*/SphericalDiameterCharacteristicMeasurement\)"),
