@@ -137,15 +137,26 @@ def _um(v: float) -> str:
     return f"{v * 1e3:9.3f} um" if math.isfinite(v) else "      n/a"
 
 
+def _t95(k: float, dof: int) -> str:
+    """How the 95 % intervals were found: Student's t on the repeatability's dof."""
+    if not math.isfinite(k):
+        return "95 % intervals: none (no degrees of freedom)"
+    return f"95 % intervals: +- t*u with Student t = {k:.3f} for {dof} dof"
+
+
 def m4_table(r: Any) -> str:
     """The seed's test result as text (lengths in mm, errors in um)."""
+    k = r.k95
     rows = [
         f"l1 {r.l1:.4f} mm   R1 {r.ball_radius:.4f} mm   r1 = r2 {r.r1:.4f} mm",
         f"x1 (B+90) {r.x1:.4f} mm   x2 (B-90) {r.x2:.4f} mm",
-        f"delta rigid     {_um(r.delta_rigid)}  u {_um(r.u_delta_rigid)}",
-        f"delta compliant {_um(r.delta)}  u {_um(r.u_delta)}",
-        f"epsilon         {_um(r.epsilon)}  u {_um(r.u_epsilon)}",
-        f"touch repeatability {_um(r.sigma)}",
+        f"delta rigid     {_um(r.delta_rigid)}  u {_um(r.u_delta_rigid)}  "
+        f"95% +-{_um(k * r.u_delta_rigid)}",
+        f"delta compliant {_um(r.delta)}  u {_um(r.u_delta)}  95% +-{_um(k * r.u_delta)}",
+        f"epsilon         {_um(r.epsilon)}  u {_um(r.u_epsilon)}  "
+        f"95% +-{_um(k * r.u_epsilon)}",
+        f"touch repeatability {_um(r.sigma)} ({r.dof} dof)",
+        _t95(k, r.dof),
         f"compensation: work offset X by {r.compensation[0]:+.4f} mm",
     ]
     return "\n".join(rows)
@@ -156,11 +167,13 @@ def pivot_table(r: Any) -> str:
     rows: list[str] = []
     for a in (r.c, r.b):
         rows.append(f"{a.axis} axis ({len(a.angles)} stations, {a.dof} dof, chi2/dof "
-                    f"{a.chi2:.2f}, touch sigma {_um(a.sigma).strip()})")
+                    f"{a.chi2:.2f}, touch sigma {_um(a.sigma).strip()} on {a.sigma_dof} dof)")
+        t = a.k95
         for k, (name, v, u) in enumerate(zip(a.names, a.values, a.uncertainties, strict=True)):
-            unit = (_um(v), _um(u)) if k < 2 else (f"{v * 1e6:9.3f} urad",
-                                                   f"{u * 1e6:9.3f} urad")
-            rows.append(f"  {name}  {unit[0]}  u {unit[1]}")
+            unit = (_um(v), _um(u), _um(t * u)) if k < 2 else (
+                f"{v * 1e6:9.3f} urad", f"{u * 1e6:9.3f} urad", f"{t * u * 1e6:9.3f} urad")
+            rows.append(f"  {name}  {unit[0]}  u {unit[1]}  95% +-{unit[2]}")
+        rows.append(f"  {_t95(t, a.sigma_dof)}")
         rows.append(f"  circle radius {a.circle.radius:.4f} mm, roundness {_um(a.circle.form)}")
         for ang, res in zip(a.angles, a.residuals, strict=True):
             rows.append(f"  {a.axis}{ang:8.2f}  residual " + " ".join(_um(v) for v in res))

@@ -169,6 +169,17 @@ def form_u(fit_sigma: float, budget: Budget) -> float:
     return math.sqrt(2.0) * noise
 
 
+def t_factor(dof: int, level: float = 0.95) -> float:
+    """Student's t coverage factor for a two-sided ``level`` interval with ``dof`` degrees
+    of freedom (``nan`` without any): the factor a standard uncertainty estimated from a
+    few samples needs, in place of the normal distribution's 1.96."""
+    if dof < 1:
+        return math.nan
+    from scipy.stats import t
+
+    return float(t.ppf(0.5 + level / 2.0, dof))
+
+
 def decide(deviation: float, lower: float | None, upper: float | None,
            u: float | None) -> str | None:
     """ISO 14253-1 decision for a deviation and its limits (None when not toleranced)."""

@@ -4,6 +4,7 @@ read the DPRNT log, identify, compare with the truth."""
 from __future__ import annotations
 
 import functools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import mutate
+from scipy import stats
 
 from probegen.calibrate.rotary import M4Result, PivotResult, identify_m4, identify_pivot
 from probegen.dialects import get_dialect
@@ -194,6 +196,12 @@ def test_cli_plan_sim_identify(tmp_path: Path, capsys: pytest.CaptureFixture[str
                  str(comp)]) == 0
     out = capsys.readouterr().out
     assert "delta compliant" in out and "G91 G10 L2 P1 X-" in comp.read_text()
+    # few samples: the 95 % intervals use Student's t on the repeatability's dof
+    found = re.search(r"Student t = ([0-9.]+) for (\d+) dof", out)
+    assert found is not None, out
+    assert float(found[1]) == pytest.approx(float(stats.t.ppf(0.975, int(found[2]))),
+                                            abs=1e-3)
+    assert float(found[1]) > 2.0  # a handful of samples: wider than the normal 1.96
     assert main(["rotary", "plan", spec, "-d", "dmis", "-o", str(tmp_path)]) == 5
 
 

@@ -54,6 +54,7 @@ from probegen.geometry.fits_results import Circle3dFit
 from probegen.machine.kinematics import head_shift
 from probegen.planning.rotary import RotaryPlan, Station
 from probegen.results.dprnt import DprntLog
+from probegen.uncertainty import t_factor
 
 Vec3 = tuple[float, float, float]
 Model = Callable[[np.ndarray], np.ndarray]
@@ -75,6 +76,7 @@ class M4Result:
             circle residuals and the repeats).
         sphere_xy: the sphere's centre at B = 0 from the circle, work X, Y.
         compensation: the work-offset shift (X, Y, Z) that moves the origin by −δ.
+        dof: degrees of freedom of ``sigma`` (``n − 3 + 2(k − 1)``).
     """
 
     l1: float
@@ -92,6 +94,12 @@ class M4Result:
     sigma: float
     sphere_xy: tuple[float, float]
     compensation: Vec3
+    dof: int = 0
+
+    @property
+    def k95(self) -> float:
+        """Student's t factor of the 95 % intervals ``±k95·u`` (few samples: not 1.96)."""
+        return t_factor(self.dof)
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,6 +119,7 @@ class AxisResult:
         dof: degrees of freedom of the axis fit.
         chi2: weighted sum of squared residuals of the axis fit over ``dof``.
         circle: the 3-D circle through the centres (C) or the tool vectors (B).
+        sigma_dof: degrees of freedom of ``sigma`` (``Σ (n − 4)`` over the stations).
     """
 
     axis: str
@@ -125,6 +134,12 @@ class AxisResult:
     dof: int
     chi2: float
     circle: Circle3dFit
+    sigma_dof: int = 0
+
+    @property
+    def k95(self) -> float:
+        """Student's t factor of the 95 % intervals ``±k95·u`` (on ``sigma_dof``)."""
+        return t_factor(self.sigma_dof)
 
 
 @dataclass(frozen=True, slots=True)
@@ -175,7 +190,7 @@ def identify_m4(plan: RotaryPlan, log: DprntLog) -> M4Result:
     x2 = -(float(np.mean(x2s)) - spec.pivot_length - spec.sphere_centre[0])
     l1 = spec.pivot_length
     delta = ((x2 - x1) - (r2 - r1)) / 2.0
-    sigma = _pooled_sigma(np.asarray(circle.residuals), x1s, x2s)
+    sigma, dof = _pooled_sigma(np.asarray(circle.residuals), x1s, x2s)
     n, k = len(circle.residuals), len(x1s)
     return M4Result(
         l1=l1, ball_radius=ball, r1=r1, r2=r2, x1=x1, x2=x2,
@@ -183,17 +198,18 @@ def identify_m4(plan: RotaryPlan, log: DprntLog) -> M4Result:
         u_delta_rigid=sigma * math.sqrt(1.0 / k + 1.0 / n),
         u_delta=sigma / math.sqrt(2.0 * k),
         u_epsilon=sigma * math.sqrt(1.0 / (2.0 * k) + 1.0 / n),
-        sigma=sigma, sphere_xy=circle.centre, compensation=(-delta, 0.0, 0.0))
+        sigma=sigma, sphere_xy=circle.centre, compensation=(-delta, 0.0, 0.0), dof=dof)
 
 
-def _pooled_sigma(circle: np.ndarray, *repeats: np.ndarray) -> float:
-    """Touch repeatability from the circle residuals (n − 3 dof) and the repeats."""
+def _pooled_sigma(circle: np.ndarray, *repeats: np.ndarray) -> tuple[float, int]:
+    """Touch repeatability from the circle residuals (n − 3 dof) and the repeats, and
+    its degrees of freedom."""
     ss = float(np.sum(circle**2))
     dof = len(circle) - 3
     for r in repeats:
         ss += float(np.sum((r - r.mean()) ** 2))
         dof += len(r) - 1
-    return math.sqrt(ss / dof) if dof > 0 else math.nan
+    return (math.sqrt(ss / dof) if dof > 0 else math.nan), max(dof, 0)
 
 
 # --------------------------------------------------------------------- the pivot
@@ -240,6 +256,7 @@ class _Centres:
     centres: np.ndarray
     whiten: np.ndarray
     sigma: float
+    dof: int
 
 
 def _sphere_centres(points: list[np.ndarray]) -> _Centres:
@@ -255,7 +272,7 @@ def _sphere_centres(points: list[np.ndarray]) -> _Centres:
         normal = jac.T @ jac  # the centre's information: the Schur complement of the radius
         info = normal[:3, :3] - np.outer(normal[:3, 3], normal[3, :3]) / normal[3, 3]
         whiten.append(np.linalg.cholesky(info).T / (sigma if sigma > 0 else 1.0))
-    return _Centres(np.array([f.centre for f in fits]), np.array(whiten), sigma)
+    return _Centres(np.array([f.centre for f in fits]), np.array(whiten), sigma, max(dof, 0))
 
 
 def _fit_axis(axis: str, model: Model, start: np.ndarray, data: _Centres,
@@ -288,7 +305,7 @@ def _fit_axis(axis: str, model: Model, start: np.ndarray, data: _Centres,
         residuals=tuple(_vec(r) for r in (flat - model(q)).reshape(-1, 3)),
         sphere=_vec(q[4:7]), sigma=data.sigma, dof=dof,
         chi2=float(np.sum(fit.fun**2)) / dof if dof > 0 else math.nan,
-        circle=fit_circle_3d(circle_points(q)))
+        circle=fit_circle_3d(circle_points(q)), sigma_dof=data.dof)
 
 
 def _vec(v: np.ndarray) -> Vec3:
