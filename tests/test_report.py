@@ -94,6 +94,27 @@ def test_tolerances_colour_the_status(results: dict[str, Any]) -> None:
     assert '<span class="badge nok">NOT OK</span>' in html
 
 
+def test_summary_shows_U_and_the_iso_14253_decision(results: dict[str, Any],
+                                                    ingested: Any) -> None:
+    d = next(c for c in ingested.results[0].characteristics if c.name == "D")
+    doc = json.loads(json.dumps(results))
+    chars = doc["features"][0]["characteristics"]
+    chars[4].update(lower=-0.0008 - 0.5 * d.U, upper=0.01, ok=True, decision="undecided")
+    html = render_report(doc)
+    row = re.search(r'<th scope="row">D</th>(.*?)</tr>', html)
+    assert row is not None
+    cells = re.findall(r">([^<]*)</td>", row[1])
+    assert cells[-2:] == [f"{d.U:.4f}", "undecided"] and cells[-3] == "OK"
+    assert "decision rule simple (simple acceptance" in html
+    assert "the machine contribution was not stated" in html
+    old = json.loads(json.dumps(results))
+    for c in old["features"][0]["characteristics"]:
+        del c["U"], c["u"], c["decision"]
+    del old["uncertainty"]
+    row = re.search(r'<th scope="row">D</th>(.*?)</tr>', render_report(old))
+    assert row is not None and re.findall(r">([^<]*)</td>", row[1])[-2:] == ["\u2013"] * 2
+
+
 def test_notes_and_diagnostics_are_shown(results: dict[str, Any]) -> None:
     doc = dict(results, notes=["feature SPH1: no touch for points 7"],
                diagnostics=["run.log:12:4: expected a number, found 'X'\n    PT X\n    ^"])

@@ -99,7 +99,7 @@ def _env() -> jinja2.Environment:
         loader=jinja2.FunctionLoader(lambda name: template_text("report", name)),
         undefined=jinja2.StrictUndefined, autoescape=True, keep_trailing_newline=True,
         trim_blocks=True, lstrip_blocks=True)
-    env.filters.update(mm=mm, dev=deviation, tol=tolerance, status=status,
+    env.filters.update(mm=mm, dev=deviation, tol=tolerance, status=status, expanded=expanded,
                        status_class=status_class, agreement=agreement,
                        trusted=_markup)
     return env
@@ -115,6 +115,11 @@ def _markup(text: str) -> Any:
 def mm(value: float) -> str:
     """A length in the table, mm."""
     return fixed(value, DECIMALS)
+
+
+def expanded(value: float | None) -> str:
+    """An expanded uncertainty in the table, mm, or ``–`` when the results have none."""
+    return "\u2013" if value is None else mm(value)
 
 
 def deviation(value: float) -> str:

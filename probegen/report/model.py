@@ -13,7 +13,9 @@ Optional keys the report understands beyond ``ingest``'s output:
 * ``calibration.functions``: ``[{"name", "positions", "values", "unit"?}]``, identified
   error functions (rotary axis M4, 21 terms M5), drawn as line plots.
 
-``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too.
+``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too, and
+so are ``uncertainty`` (the decision rule and its notes) and each characteristic's ``U``
+and ``decision``.
 """
 
 from __future__ import annotations
@@ -33,7 +35,9 @@ PATH_KINDS = ("rapid", "protected", "touch")
 
 @dataclass(frozen=True, slots=True)
 class Characteristic:
-    """One checked quantity of a feature (mm, or as the characteristic says)."""
+    """One checked quantity of a feature (mm, or as the characteristic says); ``U`` its
+    expanded uncertainty (k = 2) and ``decision`` the ISO 14253-1 decision, when the
+    results carry them."""
 
     name: str
     measured: float
@@ -42,6 +46,8 @@ class Characteristic:
     lower: float | None
     upper: float | None
     ok: bool | None
+    U: float | None = None
+    decision: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,6 +169,8 @@ class Results:
     probe: ProbeRadii | None
     functions: tuple[Function, ...]
     decisions: tuple[Decision, ...] = ()
+    decision_rule: str = ""
+    uncertainty_notes: tuple[str, ...] = ()
 
 
 def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Results:
@@ -178,6 +186,7 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
     r = _Reader(source)
     root = r.mapping(doc, "")
     cal = r.mapping(root.get("calibration", {}), "calibration")
+    unc = r.mapping(root.get("uncertainty", {}), "uncertainty")
     return Results(
         source=r.text(root.get("source", ""), "source"),
         program="" if root.get("program") is None else str(root["program"]),
@@ -195,6 +204,8 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         decisions=tuple(_decision(r, d, f"decisions[{i}]")
                         for i, d in enumerate(r.items(root.get("decisions", []),
                                                       "decisions"))),
+        decision_rule=r.text(unc.get("decision_rule", ""), "uncertainty.decision_rule"),
+        uncertainty_notes=tuple(r.texts(unc.get("notes", []), "uncertainty.notes")),
     )
 
 
@@ -227,7 +238,10 @@ def _characteristic(r: _Reader, value: object, key: str) -> Characteristic:
         deviation=r.number(c.get("deviation"), f"{key}.deviation"),
         lower=r.optional_number(c.get("lower"), f"{key}.lower"),
         upper=r.optional_number(c.get("upper"), f"{key}.upper"),
-        ok=r.flag(c.get("ok"), f"{key}.ok"))
+        ok=r.flag(c.get("ok"), f"{key}.ok"),
+        U=r.optional_number(c.get("U"), f"{key}.U"),
+        decision=None if c.get("decision") is None
+        else r.text(c.get("decision"), f"{key}.decision"))
 
 
 def _segment(r: _Reader, value: object, key: str) -> Segment:
