@@ -181,9 +181,11 @@ def _plots(result: Identification, head: float) -> dict[str, str]:
             continue
         q = np.linspace(f.range.lo, f.range.hi, 41)
         v = evaluate(f.range, q, f.coefficients, f.function.lowest)
+        band = f.band(q, result.k95)
         svg = line_plot(list(q), list(v), title=f"{f.function.name} ({f.function.kind})",
                         x_label=f"{'XYZ'[f.function.axis]} axis position, mm",
-                        y_label=f.function.unit)
+                        y_label=f.function.unit + ("" if band is None else ", 95 % band"),
+                        band=None if band is None else list(band))
         files[f"plot_{f.function.name}.svg"] = _standalone(svg)
     ranges = tuple(result.functions[k].range for k in (0, 6, 12))
     model = VolumetricModel(ranges, result.degree)

@@ -318,3 +318,41 @@ def test_xy_riser_only_reports_the_roll_curvature_and_slope_combinations(
     text = "\n".join(summary(found))
     assert "+1*slope(EAX) +1*slope(EBY): NOT IDENTIFIABLE" in text
     assert "+1*slope(EAX) -1*slope(EBY) = " in text
+
+
+def test_confidence_bands_cover_the_planted_functions(machine: Machine, tmp_path: Path) -> None:
+    """The 95 % bands (Student t × the least-squares standard uncertainty of each
+    function, from the covariance of its Legendre coefficients) hold the planted
+    function at about 95 % of the positions over three noisy runs; the CSV tables and
+    the plots carry them."""
+    from probegen.grating import write_outputs
+
+    hits = total = 0
+    for seed in range(3):
+        readings = simulate_readings(GratingSpec(), machine, second_offset=True, noise=NOISE,
+                                     seed=seed)
+        found = identify_global(readings, degree=3)  # the planted cubics: no model bias
+        true = planted(machine, readings)
+        assert found.dof > 700 and found.k95 == pytest.approx(1.963, abs=1e-3)
+        for f, t in zip(found.functions, true.functions, strict=True):
+            if f.coefficients is None:
+                continue
+            assert t.coefficients is not None
+            q = np.linspace(f.range.lo, f.range.hi, 5)
+            error = (evaluate(f.range, q, f.coefficients, f.function.lowest)
+                     - evaluate(t.range, q, t.coefficients, t.function.lowest))
+            band = f.band(q, found.k95)
+            assert band is not None and np.all(band > 0.0)
+            hits += int(np.sum(np.abs(error) <= band))
+            total += len(q)
+    assert 0.85 <= hits / total <= 0.99, hits / total
+    write_outputs(tmp_path, found, None, 100.0)
+    table = (tmp_path / "errors_x.csv").read_text(encoding="utf-8").splitlines()
+    header = next(ln for ln in table if ln.startswith("position_mm"))
+    assert "EXX_um,EXX_um_ci95" in header
+    assert any(ln.startswith("# ci95: half width of the 95 % confidence band, Student t 1.96")
+               for ln in table)
+    row = table[-1].split(",")
+    assert all(cell != "" for cell in row)
+    svg = (tmp_path / "plot_EXX.svg").read_text(encoding="utf-8")
+    assert '<polygon class="band"' in svg

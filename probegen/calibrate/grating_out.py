@@ -5,7 +5,11 @@
   between the global and the stepwise identifications.  A function the plan does not
   determine is printed ``NOT IDENTIFIABLE`` with what it is confounded with: never a value.
 * ``axis_table``: CSV per axis, every ``step`` mm: the axis' determined functions (µm,
-  µrad) about their ISO 230-1 references; undetermined ones have no column.
+  µrad) about their ISO 230-1 references, each followed by the half width of its 95 %
+  confidence band (``<name>_<unit>_ci95``: Student's t on the dispersion's degrees of
+  freedom times the standard uncertainty from the least-squares covariance of the
+  Legendre coefficients; empty for an identification without covariance, the stepwise
+  one); undetermined ones have no column.
 * ``fanuc_pitch_table``: the positioning error as a Fanuc-type pitch error compensation
   table (layout below).
 * ``volumetric_map``: CSV of the error vector over a grid of the work volume, from the
@@ -103,15 +107,22 @@ def axis_table(result: Identification, axis: int, step: float = 10.0) -> str:
     missing = [f.function.name for f in result.functions
                if f.function.axis == axis and not f.determined]
     lines.append(f"# not identifiable (no column): {' '.join(missing) or '-'}")
-    lines.append(",".join(["position_mm"] + [f"{f.function.name}_{f.function.unit}"
-                                             for f in funcs]))
+    lines.append(f"# ci95: half width of the 95 % confidence band, Student t "
+                 f"{result.k95:.3f} on {result.dof} dof"
+                 if math.isfinite(result.k95) else "# ci95: no confidence band")
+    lines.append(",".join(["position_mm"] + [f"{f.function.name}_{f.function.unit}{end}"
+                                             for f in funcs for end in ("", "_ci95")]))
     if rng is None:
         return "\n".join(lines) + "\n"
     q = _positions(rng.lo, rng.hi, step)
-    columns = [evaluate(f.range, q, f.coefficients, f.function.lowest) for f in funcs
-               if f.coefficients is not None]
+    columns: list[FloatArray | None] = []
+    for f in funcs:
+        if f.coefficients is not None:
+            columns += [evaluate(f.range, q, f.coefficients, f.function.lowest),
+                        f.band(q, result.k95)]
     for i, x in enumerate(q):
-        lines.append(",".join([f"{x:.3f}"] + [f"{c[i]:.4f}" for c in columns]))
+        lines.append(",".join([f"{x:.3f}"] + ["" if c is None else f"{c[i]:.4f}"
+                                              for c in columns]))
     return "\n".join(lines) + "\n"
 
 

@@ -39,9 +39,10 @@ from probegen.calibrate.identify_model import (
     design,
 )
 from probegen.errors import CalibrationError
-from probegen.geometry.orthopoly import AxisRange, project
+from probegen.geometry.orthopoly import AxisRange, basis, project
 from probegen.machine.errors_model import ErrorModel
 from probegen.machine.kinematics import PLANES
+from probegen.uncertainty import t_factor
 
 SQUARENESS = {"XY": "S_XY", "XZ": "S_XZ", "YZ": "S_YZ"}
 
@@ -59,6 +60,10 @@ class FunctionResult:
         curvature: when the function is not determined but its part about its
             least-squares line is (only its slope is confounded): the coefficients of
             degrees ``function.lowest + 1``..; else None.
+        covariance: the coefficients' covariance (µm² or µrad²) from the least-squares
+            fit, ``s²·g (AᵀA)⁺ gᵀ`` (``s`` the dispersion; a determined function is an
+            estimable combination, so the pseudo-inverse gives its true variance), or
+            None (not determined, or an identification without it).
     """
 
     function: ErrorFunction
@@ -66,11 +71,22 @@ class FunctionResult:
     coefficients: FloatArray | None
     partners: tuple[str, ...] = ()
     curvature: FloatArray | None = None
+    covariance: FloatArray | None = None
 
     @property
     def determined(self) -> bool:
         """Whether the plan determines it."""
         return self.coefficients is not None
+
+    def band(self, q: FloatArray, k: float) -> FloatArray | None:
+        """Half width ``k·u`` of the confidence band of the function at positions ``q``
+        (mm), or None without a covariance."""
+        if self.covariance is None or self.coefficients is None:
+            return None
+        b = basis(self.range, q, range(self.function.lowest,
+                                       self.function.lowest + len(self.coefficients)))
+        var = np.einsum("ij,jk,ik->i", b, self.covariance, b)
+        return np.asarray(k * np.sqrt(np.maximum(var, 0.0)))
 
 
 @dataclass(frozen=True)
@@ -106,6 +122,7 @@ class Identification:
         slopes: for the functions known but for their slope (``curvature``), the
             combinations of their slopes the plan determines (with values) and those
             it does not (value None).
+        dof: degrees of freedom of ``dispersion`` (grating readings − rank).
     """
 
     method: str
@@ -117,6 +134,12 @@ class Identification:
     dispersion: float
     cv: tuple[tuple[int, float], ...] = ()
     slopes: tuple[SlopeCombination, ...] = ()
+    dof: int = 0
+
+    @property
+    def k95(self) -> float:
+        """Student's t factor of the 95 % confidence bands (on ``dof``)."""
+        return t_factor(self.dof)
 
     def function(self, name: str) -> FunctionResult:
         """The result of the function with ISO name ``name`` (e.g. ``EXX``)."""
@@ -192,16 +215,30 @@ def identify_global(readings: Sequence[GratingReading], level: Sequence[LevelRea
     return _result("global", model, full, sol, rank, tuple(cv))
 
 
+def parameter_covariance(d: Design, dispersion: float) -> FloatArray:
+    """``s²·(AᵀA)⁺`` of the design's parameters (columns scaled as in :func:`solve`)."""
+    scale = np.linalg.norm(d.matrix, axis=0)
+    scale[scale == 0.0] = 1.0
+    pinv = np.linalg.pinv(d.matrix / scale, rcond=RANK_TOL)
+    return np.asarray(dispersion**2 * (pinv @ pinv.T) / np.outer(scale, scale))
+
+
 def _result(method: str, model: VolumetricModel, d: Design, sol: FloatArray, rank: int,
             cv: tuple[tuple[int, float], ...]) -> Identification:
     ident = analyse(d)
+    grating = np.array([k == "grating" for k in d.kinds])
+    res = (d.values - d.matrix @ sol)[grating]
+    dof = max(int(np.count_nonzero(grating)) - rank, 1)
+    dispersion = float(np.sqrt(res @ res / dof))
+    cov = parameter_covariance(d, dispersion)[:model.size, :model.size]
     functions = []
     slope_rows: list[tuple[str, FloatArray]] = []
     for k, f in enumerate(FUNCTIONS):
         sel = model.function_selector(k)
         rng = model.ranges[f.axis]
         if ident.determined(sel):
-            functions.append(FunctionResult(f, rng, sel @ sol[:model.size]))
+            functions.append(FunctionResult(f, rng, sel @ sol[:model.size],
+                                            covariance=sel @ cov @ sel.T))
             continue
         curved = f.lowest == 1 and len(sel) > 1 and ident.determined(sel[1:])
         functions.append(FunctionResult(f, rng, None, tuple(ident.partners(k, model)),
@@ -214,11 +251,8 @@ def _result(method: str, model: VolumetricModel, d: Design, sol: FloatArray, ran
         g = model.plane_squareness(s)
         value = float(g @ sol[:model.size]) if ident.determined(g) else None
         squareness.append(SquarenessResult(SQUARENESS[s.plane], s, value))
-    grating = np.array([k == "grating" for k in d.kinds])
-    res = (d.values - d.matrix @ sol)[grating]
-    dof = max(int(np.count_nonzero(grating)) - rank, 1)
     return Identification(method, model.degree, tuple(functions), tuple(squareness), rank,
-                          d.matrix.shape[1], float(np.sqrt(res @ res / dof)), cv, slopes)
+                          d.matrix.shape[1], dispersion, cv, slopes, dof)
 
 
 def _slopes(ident: Identifiability, rows: list[tuple[str, FloatArray]],

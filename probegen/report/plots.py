@@ -94,8 +94,8 @@ def scatter_plot(xs: Sequence[float], ys: Sequence[float], *, title: str, x_labe
 
 
 def line_plot(xs: Sequence[float], ys: Sequence[float], *, title: str, x_label: str,
-              y_label: str) -> str:
-    """A polyline with a marker at each sample.
+              y_label: str, band: Sequence[float] | None = None) -> str:
+    """A polyline with a marker at each sample, over a shaded confidence band.
 
     Args:
         xs: positions, increasing.
@@ -103,10 +103,18 @@ def line_plot(xs: Sequence[float], ys: Sequence[float], *, title: str, x_label: 
         title: plot title.
         x_label: x axis label.
         y_label: y axis label.
+        band: half width of a band ``ys ± band`` drawn shaded under the line, or None.
     """
-    frame, xt, yt = framed(WIDTH, HEIGHT, xs, ys)
+    lo = [y - b for y, b in zip(ys, band, strict=True)] if band is not None else []
+    hi = [y + b for y, b in zip(ys, band, strict=True)] if band is not None else []
+    frame, xt, yt = framed(WIDTH, HEIGHT, xs, [*ys, *lo, *hi])
     out = [svg_open(WIDTH, HEIGHT, title)]
     out += axes(frame, xt, yt, title=title, x_label=x_label, y_label=y_label)
+    if band is not None:
+        ring = [*zip(xs, hi, strict=True), *reversed(list(zip(xs, lo, strict=True)))]
+        pts = " ".join(f"{px(frame.x(x))},{px(frame.y(y))}" for x, y in ring)
+        out.append(f'<polygon class="band" points="{pts}" fill="{palette.LINE}" '
+                   'fill-opacity="0.18" stroke="none"/>')
     pts = " ".join(f"{px(frame.x(x))},{px(frame.y(y))}" for x, y in zip(xs, ys, strict=True))
     out.append(f'<polyline points="{pts}" fill="none" stroke="{palette.LINE}" '
                'stroke-width="1.5"/>')
