@@ -8,14 +8,24 @@ stated ``U`` (k = 2) must cover the truth 95 % ± 3 % of the time.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 
+from probegen.cli import main
+from probegen.cli_exit import ExitCode
+from probegen.compensate import load_calibration
+from probegen.errors import SpecError
 from probegen.evaluate import Characteristic, evaluate_sphere_test
 from probegen.evaluate_revolved import Nominal, evaluate_revolved
+from probegen.ingest import ingest
+from probegen.machine.profile import load_profile
+from probegen.spec import load_spec
 from probegen.uncertainty import Budget, decide, verdict
 
 REPEATS = 200
@@ -163,3 +173,82 @@ def test_untoleranced_has_no_decision_and_u_gives_U() -> None:
     assert verdict(None, None, "guard_band") is None
     one_sided = Characteristic("FORM", 0.0095, 0.0, 0.0095, None, 0.01, 0.001)
     assert one_sided.decision == "undecided" and one_sided.ok is True
+
+
+SAMPLE = REPO / "samples/sphere25"
+
+
+def _stated_spec(tmp_path: Path, extra: str = "", tolerance: str = "") -> Path:
+    """The sphere-test sample spec with a profile that states its uncertainty."""
+    profile = tmp_path / "vmc.toml"
+    profile.write_text((REPO / "samples/machines/vmc-fanuc.toml").read_text()
+                       + "\n[uncertainty]\nmachine = 0.002\nprobe = 0.001\n")
+    text = (SAMPLE / "sphere_test.toml").read_text()
+    text = text.replace('"../machines/vmc-fanuc.toml"', f'"{profile}"')
+    text = text.replace('"sphere25.step"', f'"{SAMPLE / "sphere25.step"}"')
+    text = text.replace("[program]", extra + "[program]")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text + tolerance)
+    return spec
+
+
+def test_stated_contributions_reach_every_output(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    spec = _stated_spec(tmp_path)
+    cal = tmp_path / "probe.toml"
+    assert main(["ingest", str(SAMPLE / "sphere_test.log"), "--spec", str(spec), "-o",
+                 str(tmp_path), "--write-calibration", str(cal)]) == ExitCode.OK
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split()[-2:] == ["U", "decision"]
+    assert "was not stated" not in out
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert doc["uncertainty"] == {"k": 2.0, "decision_rule": "simple", "u_radius": 0.0,
+                                  "machine": 0.002, "probe": 0.001, "notes": []}
+    chars = {c["name"]: c for c in doc["features"][0]["characteristics"]}
+    # the machine's 2 µm dominates every length; the form uses the probe's 1 µm
+    assert 0.002 < chars["D"]["u"] < 0.0021 and chars["D"]["U"] == pytest.approx(
+        2 * chars["D"]["u"], abs=2e-7)
+    assert chars["P_FTU"]["u"] == pytest.approx(math.sqrt(2) * 0.001, abs=1e-7)
+    rows = (tmp_path / "results.csv").read_text().splitlines()
+    assert rows[0].endswith(",status,u,U,decision")
+    # the calibration carries the effective radius's u; an old file reads as 0
+    written = load_calibration(cal)
+    assert written.u_radius == pytest.approx(chars["R_EFF"]["u"], abs=1e-7)
+    old = tmp_path / "old.toml"
+    old.write_text("\n".join(ln for ln in cal.read_text().splitlines()
+                             if not ln.startswith("u_radius")))
+    assert load_calibration(old).u_radius == 0.0
+    again = ingest(SAMPLE / "sphere_test.log", load_spec(spec), calibration=written)
+    assert again.budget.radius == written.u_radius
+
+
+def test_guard_band_refuses_an_undecided_value(tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    # P_STU -0.8 µm against ±2 µm with U ≈ 4 µm: OK by simple acceptance, undecided,
+    # so NOT OK when guard-banded (option or the spec's [evaluation] table)
+    tol = "tolerance = { size = 0.002 }\n"
+    log = str(SAMPLE / "sphere_test.log")
+    simple = _stated_spec(tmp_path, tolerance=tol)
+    assert main(["ingest", log, "--spec", str(simple), "-o", str(tmp_path)]) == ExitCode.OK
+    doc = json.loads((tmp_path / "results.json").read_text())
+    d = {c["name"]: c for c in doc["features"][0]["characteristics"]}["D"]
+    assert (d["ok"], d["decision"]) == (True, "undecided")
+    assert main(["ingest", log, "--spec", str(simple), "-o", str(tmp_path),
+                 "--decision-rule", "guard_band"]) == ExitCode.NOT_OK
+    doc = json.loads((tmp_path / "results.json").read_text())
+    d = {c["name"]: c for c in doc["features"][0]["characteristics"]}["D"]
+    assert (d["ok"], d["decision"], doc["features"][0]["ok"]) == (False, "undecided", False)
+    banded = _stated_spec(tmp_path, '[evaluation]\ndecision_rule = "guard_band"\n\n', tol)
+    assert load_spec(banded).decision_rule == "guard_band"
+    assert main(["ingest", log, "--spec", str(banded), "-o", str(tmp_path)]) == ExitCode.NOT_OK
+    assert "decision rule guard_band" in capsys.readouterr().out
+
+
+def test_bad_uncertainty_settings_name_the_key(tmp_path: Path) -> None:
+    bad = _stated_spec(tmp_path, '[evaluation]\ndecision_rule = "lenient"\n\n')
+    with pytest.raises(SpecError, match=r"evaluation\.decision_rule"):
+        load_spec(bad)
+    profile = tmp_path / "vmc.toml"
+    profile.write_text(profile.read_text().replace("machine = 0.002", "machine = -1"))
+    with pytest.raises(SpecError, match=r"uncertainty\.machine: expected a number >= 0"):
+        load_profile(profile)
