@@ -2,7 +2,8 @@
 
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
 collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
-tolerance, 9 capture ended without the end marker, 10 the simulated program alarmed,
+tolerance (``ingest``: not accepted under the ISO 14253-1 decision rule, see
+``docs/results.md``), 9 capture ended without the end marker, 10 the simulated program alarmed,
 64 usage.
 """
 
