@@ -16,11 +16,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mutations import mutate
 
 from probegen.cli import main
 from probegen.cli_exit import ExitCode
 from probegen.compensate import load_calibration
-from probegen.errors import SpecError
+from probegen.errors import ProbegenError, SpecError
 from probegen.evaluate import Characteristic, evaluate_sphere_test
 from probegen.evaluate_revolved import Nominal, evaluate_revolved
 from probegen.ingest import ingest
@@ -252,3 +256,39 @@ def test_bad_uncertainty_settings_name_the_key(tmp_path: Path) -> None:
     profile.write_text(profile.read_text().replace("machine = 0.002", "machine = -1"))
     with pytest.raises(SpecError, match=r"uncertainty\.machine: expected a number >= 0"):
         load_profile(profile)
+
+
+PROFILE_TEXT = (REPO / "samples/machines/vmc-fanuc.toml").read_text()
+STATED = "\n[uncertainty]\nmachine = 0.002\nprobe = 0.001\n"
+CALIBRATION = ("[calibration]\nball_radius = 3.0\neffective_radius = 2.9996\n"
+               "directions = [[0.0, 0.0, 1.0]]\nradii = [2.9996]\nu_radius = 0.0002\n")
+EVALUATION = '\n[evaluation]\ndecision_rule = "guard_band"\n'
+
+
+@st.composite
+def _mutated(draw: st.DrawFn) -> tuple[str, str]:
+    which = draw(st.sampled_from(["profile", "calibration", "evaluation"]))
+    base = {"profile": STATED, "calibration": CALIBRATION, "evaluation": EVALUATION}[which]
+    text = mutate(draw, base, '[]="=.,-0123456789e_abcdgilnmoprstuvx \n')
+    return which, PROFILE_TEXT + text if which == "profile" else text
+
+
+@settings(max_examples=examples(120),
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(_mutated())
+def test_mutated_uncertainty_inputs_end_in_a_result_or_an_error(
+        tmp_path: Path, case: tuple[str, str]) -> None:
+    which, text = case
+    path = tmp_path / "in.toml"
+    path.write_text(text, encoding="utf-8")
+    try:
+        if which == "profile":
+            stated = load_profile(path).uncertainty
+            assert all(v is None or 0.0 <= v <= 1.0 for v in (stated.machine, stated.probe))
+        elif which == "calibration":
+            assert 0.0 <= load_calibration(path).u_radius <= 1.0
+        else:
+            spec = _stated_spec(tmp_path, text)
+            assert load_spec(spec).decision_rule in ("simple", "guard_band")
+    except ProbegenError:
+        pass
