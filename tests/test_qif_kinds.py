@@ -206,3 +206,36 @@ def test_statuses_follow_the_decision_rule(every_kind: Ingested) -> None:
             ".//q:CharacteristicStatusEnum", namespaces=NS) == "FAIL"
         assert _measurement(root, "SURF E2").findtext(
             ".//q:CharacteristicStatusEnum", namespaces=NS) == "PASS"
+
+
+def test_cli_exports_a_revolved_log(in_repo: Path, tmp_path: Path,
+                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """``probegen qif LOG --spec``: the bore block's bore (cylinder) and boss (circle) from
+    a virtual machine run, validated against the schema by the command itself."""
+    from probegen import cad
+    from probegen.cli import main
+    from probegen.dialects import get_dialect
+    from probegen.machine.probe_model import ProbeModel
+    from probegen.planning import plan_program
+    from probegen.sim.contact import PlacedPart
+    from probegen.sim.vm import VirtualMachine, run_text
+
+    spec = "samples/bore_block/bore_block.toml"
+    d = get_dialect("fanuc")
+    text = d.generate(plan_program(load_spec(spec), runtime_variables=True).program)
+    model = cad.load_step(REPO / "samples/bore_block/bore_block.step")
+    vm = VirtualMachine(PlacedPart.from_model(model, translation=np.array([0.3, -0.2, 0.0])),
+                        ProbeModel(3.0, noise_sigma=0.001, seed=4))
+    log = tmp_path / "run.log"
+    log.write_text(run_text(text, vm, kind="macrob").output)
+    out = tmp_path / "r.qif"
+    assert main(["qif", str(log), "--spec", spec, "-o", str(out), "--validate", "--schema",
+                 str(SCHEMA / "QIFDocument.xsd"), "--decision-rule", "guard_band"]) == 0
+    assert "valid against the QIF 3 schema" in capsys.readouterr().out
+    root = _doc(out.read_text())
+    assert root.find(".//q:CylinderFeatureMeasurement/q:Diameter", NS) is not None
+    circle = root.find(".//q:CircleFeatureMeasurement/q:Diameter", NS)
+    assert circle is not None and float(circle.get("combinedUncertainty", "0")) > 0.0
+    notes = [a.get("value") or "" for a in
+             root.iterfind(".//q:MeasurementResults/q:Attributes/*", NS)]
+    assert any("decision rule guard_band" in n for n in notes)
