@@ -44,7 +44,7 @@ from probegen.ingest_actions import Decision, decisions
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
-from probegen.uncertainty import COVERAGE_FACTOR, Budget
+from probegen.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
 
 Vec3 = tuple[float, float, float]
 
@@ -85,6 +85,15 @@ class Ingested:
     freeform: tuple[FreeformResult, ...] = ()
     rule: str = "simple"
     budget: Budget = Budget()
+
+    @property
+    def uncertainty_notes(self) -> tuple[str, ...]:
+        """What the uncertainties leave out: unstated contributions, fits with few
+        degrees of freedom."""
+        fits = [(r.feature, "sphere_test", len(r.points)) for r in self.results]
+        fits += [(r.feature, r.kind, len(r.points)) for r in self.revolved]
+        few = [few_dof_note(f, k, n, self.budget) for f, k, n in fits]
+        return (*self.budget.notes(), *(n for n in few if n is not None))
 
     @property
     def ok(self) -> bool:
@@ -320,7 +329,7 @@ def to_json(ing: Ingested) -> str:
         "complete": ing.log.complete,
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
-        "uncertainty": uncertainty_json(ing.budget, ing.rule),
+        "uncertainty": uncertainty_json(ing.budget, ing.rule, ing.uncertainty_notes),
         "features": [_feature_json(r, ing.rule) for r in ing.results]
         + [_revolved_json(r, ing.rule) for r in ing.revolved]
         + [freeform_json(r, ing.rule) for r in ing.freeform],
@@ -336,13 +345,13 @@ def to_json(ing: Ingested) -> str:
     return json.dumps(doc, indent=2) + "\n"
 
 
-def uncertainty_json(budget: Budget, rule: str) -> dict[str, Any]:
+def uncertainty_json(budget: Budget, rule: str, notes: Sequence[str]) -> dict[str, Any]:
     """The ``uncertainty`` object of ``results.json``: coverage factor, decision rule and
     the stated contributions (None: not stated), with what they leave out."""
     return {"k": COVERAGE_FACTOR, "decision_rule": rule, "u_radius": _f(budget.radius),
             "machine": None if budget.machine is None else _f(budget.machine),
             "probe": None if budget.probe is None else _f(budget.probe),
-            "notes": list(budget.notes())}
+            "notes": list(notes)}
 
 
 def _opt_f(x: float | None) -> float | None:
@@ -465,7 +474,7 @@ def to_table(ing: Ingested) -> str:
     text = _columns(rows)
     text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
              f"{ing.rule} (ISO 14253-1)\n")
-    text += "".join(f"{note}\n" for note in ing.budget.notes())
+    text += "".join(f"{note}\n" for note in ing.uncertainty_notes)
     if ing.decisions:
         text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
             (d.feature, d.key, _opt(d.offline), _opt(d.machine),

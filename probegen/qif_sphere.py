@@ -72,7 +72,7 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
     b = QifBuilder(application, version, created, qpid)
     begin_document(b, standard=STANDARD if ing.results else GPS_STANDARD, source=ing.source,
                    source_kind="DPRNT log")
-    b.notes += [*ing.notes, *ing.budget.notes(),
+    b.notes += [*ing.notes, *ing.uncertainty_notes,
                 f"uncertainty: combinedUncertainty is the standard uncertainty u; the "
                 f"expanded U = 2u; decision rule {ing.rule} (ISO 14253-1)"]
     resources = _resources(b, ing, spec)

@@ -49,6 +49,9 @@ STEP = 1e-6
 """Parameter step (mm, rad) of the numerical derivatives: far above the fits' convergence
 (1e-10 mm), far below any curvature of the models."""
 CONFORMING, NON_CONFORMING, UNDECIDED = "conforming", "non-conforming", "undecided"
+FIT_PARAMETERS = {"sphere_test": 4, "circle": 3, "cylinder": 5, "cone": 6, "sphere": 4,
+                  "torus": 7}
+"""Parameters ``p`` of each kind's fit (a circle: in its plane)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,6 +107,18 @@ class FitCovariance:
     sigma: float
     dof: int
     few: bool
+
+
+def few_dof_note(feature: str, kind: str, n: int, budget: Budget) -> str | None:
+    """The note for a fit with ``n − p < FEW_DOF`` degrees of freedom, else None."""
+    dof = n - FIT_PARAMETERS.get(kind, n)
+    if kind not in FIT_PARAMETERS or dof >= FEW_DOF:
+        return None
+    floor = ("the stated probe contribution when larger" if budget.probe is not None
+             else "nothing: state the profile's [uncertainty] probe")
+    return (f"uncertainty: feature {feature}: {n} touches for {FIT_PARAMETERS[kind]} fit "
+            f"parameters leave {dof} degrees of freedom (< {FEW_DOF}): the residual sigma "
+            f"is unreliable; u uses it or {floor}")
 
 
 def jacobian(func: Callable[[Array], Array], size: int) -> Array:

@@ -8,6 +8,7 @@ stated ``U`` (k = 2) must cover the truth 95 % ± 3 % of the time.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -30,7 +31,7 @@ from probegen.evaluate_revolved import Nominal, evaluate_revolved
 from probegen.ingest import ingest
 from probegen.machine.profile import load_profile
 from probegen.spec import load_spec
-from probegen.uncertainty import Budget, decide, verdict
+from probegen.uncertainty import Budget, decide, few_dof_note, verdict
 
 REPEATS = 200
 NOISE = 0.002  # mm, per coordinate of each ball centre
@@ -149,6 +150,15 @@ def test_few_degrees_of_freedom_use_the_stated_probe_contribution() -> None:
     d1 = {ch.name: ch for ch in probe.characteristics}["D"]
     assert d0.u == pytest.approx(0.0, abs=1e-9)
     assert d1.u == pytest.approx(2 * 0.001 / math.sqrt(5), rel=1e-3)
+    # every output says so
+    sphere = ingest(SAMPLE / "sphere_test.log", load_spec(SAMPLE / "sphere_test.toml"))
+    notes = dataclasses.replace(sphere, revolved=(none,)).uncertainty_notes
+    assert ("uncertainty: feature C: 5 touches for 3 fit parameters leave 2 degrees of "
+            "freedom (< 5): the residual sigma is unreliable; u uses it or nothing: state "
+            "the profile's [uncertainty] probe") in notes
+    assert not any("feature SPH1" in n for n in notes)  # 25 touches: 21 dof
+    assert few_dof_note("C", "circle", 5, Budget(probe=0.001)) is not None
+    assert few_dof_note("C", "circle", 8, Budget()) is None
 
 
 @pytest.mark.parametrize("deviation, u, expected", [
