@@ -227,16 +227,12 @@ def uncertainties(shape: FittedShape, ball_centres: Array, sections: IntArray,
         u["P_STU"] = u["D"]
     if shape.kind == "sphere":  # the sphere test's effective radius: R_fit + constants
         u["R_EFF"] = combine(math.sqrt(max(cov_g[6, 6], 0.0)) / 2.0, m)
-    noise = form_u(fit.sigma, budget)
-    out = []
-    for c in chars:
-        if c.name in FORM_NAMES or c.name.startswith("RON_S"):
-            out.append(replace(c, u=noise))
-        elif c.name in u:
-            out.append(replace(c, u=u[c.name]))
-        else:
-            out.append(c)
-    return tuple(out)
+    for form in (c.name for c in chars):
+        if form in FORM_NAMES or form.startswith("RON_S"):
+            u[form] = form_u(fit.sigma, budget)
+    # a degenerate fit (a singular or non-finite covariance) gives no u rather than NaN
+    return tuple(replace(c, u=u[c.name]) if math.isfinite(u.get(c.name, math.nan)) else c
+                 for c in chars)
 
 
 def _section_u(q: Array, sections: IntArray, sigma: float, budget: Budget) -> dict[str, float]:
