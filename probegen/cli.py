@@ -3,7 +3,9 @@
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
 collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
 tolerance, 9 capture ended without the end marker, 10 the simulated program alarmed,
-64 usage.
+11 incomplete: a feature or toleranced characteristic NOT EVALUATED or the run did not
+finish (``ingest``, ``post-ingest``; 8 wins when something is also out of tolerance, see
+``probegen.cli_exit``), 64 usage.
 """
 
 from __future__ import annotations

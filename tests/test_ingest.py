@@ -80,7 +80,12 @@ def test_missing_touches_are_noted(in_repo: Path, tmp_path: Path) -> None:
     result = ingest(log, load_spec(SPEC))
     assert result.notes == ("the log has no PGEND line: the program did not finish",
                             "feature SPH1: no touch for points 17-18")
-    assert len(result.results[0].points) == 23
+    # a partial feature is never signed: NOT EVALUATED, its 23-point fit for information
+    assert result.results == ()
+    (n,) = result.not_evaluated
+    assert (n.feature, n.reason) == ("SPH1", "no touch for points 17-18")
+    assert n.partial is not None and len(n.partial.points) == 23 and result.status == \
+        "NOT EVALUATED"
 
 
 def test_a_log_without_touches_is_an_error(in_repo: Path, tmp_path: Path) -> None:
