@@ -490,8 +490,9 @@ def _not_evaluated_json(n: NotEvaluated) -> dict[str, Any]:
     """A NOT EVALUATED feature: the partial fit's keys when there is one (for
     information), every characteristic's ``ok`` None and its status NOT EVALUATED
     (``-`` where not toleranced)."""
-    doc = {"id": n.feature, "kind": n.kind, "ok": None, "n": 0, "characteristics": [],
-           "points": [], "directions": [], "residuals": []}
+    doc: dict[str, Any] = {"id": n.feature, "kind": n.kind, "ok": None, "n": 0,
+                           "characteristics": [], "points": [], "directions": [],
+                           "residuals": []}
     if n.partial is not None:
         doc = _evaluated_json(n.partial)
     doc["characteristics"] = [
