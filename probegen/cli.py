@@ -129,14 +129,16 @@ def _post(args: argparse.Namespace) -> int:
 
 
 def _post_ingest(args: argparse.Namespace) -> int:
-    from probegen.post.evaluate import ingest_file, results_table
+    from probegen.cli_results import verdict_code
+    from probegen.post.evaluate import ingest_file, results_table, run_status
 
-    result = ingest_file(args.log, args.features)
+    log, result = ingest_file(args.log, args.features)
     Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
     sys.stdout.write(results_table(result))
+    status = run_status(log, result)
+    print(f"status: {status}{'' if log.complete else ' (the run did not finish)'}")
     print(f"wrote {args.output}")
-    failed = any(not t.in_tolerance for t in result.tolerances.values())
-    return ExitCode.NOT_OK if failed else ExitCode.OK
+    return verdict_code(status)
 
 
 def build_parser() -> argparse.ArgumentParser:
