@@ -124,13 +124,15 @@ class _Gaps:
         self.notouch = {(e.feature, e.index): e.line for e in log.errors
                         if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
 
-    def reason(self, feature: str, indices: Sequence[int]) -> str:
-        """Why the feature is incomplete ("" when every touch is there)."""
+    def reason(self, feature: str, indices: Sequence[int], *, missing_too: bool = True
+               ) -> str:
+        """Why the feature is incomplete ("" when every touch is there); only the
+        no-contact touches unless ``missing_too``."""
         blind = [k for k in indices if (feature, k) in self.notouch]
         missing = [k for k in indices if (feature, k) not in self.touches and k not in blind]
         why = [f"no contact at point {k} (ERR NOTOUCH, line {self.notouch[(feature, k)]})"
                for k in blind]
-        if missing:
+        if missing and missing_too:
             why.append(f"no touch for point{'s' if len(missing) > 1 else ''} "
                        f"{_ranges(missing)}")
         return "; ".join(why)
@@ -291,11 +293,13 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
     full, missing = complete_guides(feature.id, feature.method, nominal, touches)
     lim = feature.deviation
     names = [] if lim is None else [(f"E{p.guide}", lim[0], lim[1]) for p in nominal]
-    reason = "" if gaps is None else gaps.reason(feature.id, [t.index for t in plan.touches])
+    reason = "" if gaps is None else gaps.reason(
+        feature.id, [t.index for t in plan.touches], missing_too=False)
     if missing:
         notes.append(f"feature {feature.id}: guide points {_ranges(missing)} lack touches, "
                      "not evaluated")
-        reason = reason or f"guide points {_ranges(missing)} lack touches"
+        reason = "; ".join(w for w in (reason, f"guide points {_ranges(missing)} lack "
+                                               "touches") if w)
     if not full:
         notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
                      "touches")
