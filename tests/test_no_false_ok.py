@@ -15,6 +15,7 @@ import csv
 import io
 import json
 import math
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,9 +23,13 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import REPO, SHARED
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen import cad
 from probegen.cli import ExitCode, main
+from probegen.errors import ProbegenError
 from probegen.evaluate import run_status
 
 LOG = REPO / "samples/sphere25/sphere_test.log"
@@ -184,6 +189,45 @@ def test_out_of_tolerance_wins_over_not_evaluated(tmp_path: Path,
     assert (r.feature("SPH1")["status"], r.feature("SPH2")["status"]) == ("NOT OK",
                                                                            "NOT EVALUATED")
     assert GREEN not in r.html
+
+
+@pytest.fixture(scope="module")
+def toleranced_spec(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    from probegen.spec import load_spec
+
+    return load_spec(sphere_spec(tmp_path_factory.mktemp("spec")))
+
+
+@settings(max_examples=examples(40))
+@given(dropped=st.sets(st.integers(1, 25)), blind=st.sets(st.integers(1, 25)),
+       finished=st.booleans())
+def test_only_a_whole_run_is_ok(toleranced_spec: Any, dropped: set[int], blind: set[int],
+                                finished: bool) -> None:
+    """Any mix of dropped touches, no-contact touches and a missing end: OK exactly when
+    nothing is missing, else NOT EVALUATED (the sample meets its limits), or an error
+    when no touch is left; never a traceback."""
+    from probegen.ingest import ingest, to_csv, to_json
+
+    out = []
+    for line in LOG.read_text().splitlines():
+        k = int(line.split()[2]) if line.startswith("PT SPH1 ") else 0
+        if (k in dropped) or (line.startswith("PGEND") and not finished):
+            continue
+        out.append(line)
+        if k in blind:
+            out.append(f"ERR NOTOUCH SPH1 {k}")
+    with tempfile.TemporaryDirectory() as tmp:
+        log = Path(tmp) / "run.log"
+        log.write_text("\n".join(out) + "\n")
+        try:
+            ing = ingest(log, toleranced_spec)
+        except ProbegenError as exc:
+            assert len(dropped) == 25 and "found none usable" in str(exc)
+            return
+    whole = not dropped and not blind and finished
+    assert ing.status == ("OK" if whole else "NOT EVALUATED")
+    assert (json.loads(to_json(ing))["status"] == ing.status)
+    assert ("NOT EVALUATED" in to_csv(ing)) == bool(dropped or blind)
 
 
 def test_run_status_rule() -> None:
