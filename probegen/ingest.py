@@ -147,7 +147,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
     record the nominal stylus path for the report.
 
     Raises:
-        ProbegenError: the log holds no touch of any feature of the spec.
+        ProbegenError: the log holds no touch of any feature of the spec, and no alarm
+            of one (a run stopped at its first touch is NOT EVALUATED).
     """
     log = read_dprnt(log_path)
     notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
@@ -156,7 +157,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
         notes.append("the log has no PGEND line: the program did not finish")
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
     ids = {f.id for f in spec.features}
-    if not any(f in ids for f, _ in touches):
+    if not any(f in ids for f, _ in touches) and not any(e.feature in ids
+                                                          for e in log.errors):
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
     gaps = _Gaps(log, touches)

@@ -90,9 +90,15 @@ def test_missing_touches_are_noted(in_repo: Path, tmp_path: Path) -> None:
 
 def test_a_log_without_touches_is_an_error(in_repo: Path, tmp_path: Path) -> None:
     log = tmp_path / "empty.log"
-    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH1 1\n")
-    with pytest.raises(ProbegenError, match="found none usable.*ERR NOTOUCH SPH1 1"):
+    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH9 1\n")
+    with pytest.raises(ProbegenError, match="found none usable.*ERR NOTOUCH SPH9 1"):
         ingest(log, load_spec(SPEC))
+    # a run of this spec stopped at its first touch is not an input error: NOT EVALUATED
+    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH1 1\n")
+    ing = ingest(log, load_spec(SPEC))
+    assert ing.status == "NOT EVALUATED"
+    assert ing.not_evaluated[0].reason == ("no contact at point 1 (ERR NOTOUCH, line 3); "
+                                           "no touch for points 2-25")
 
 
 def test_capture_then_ingest_over_a_pty(in_repo: Path, tmp_path: Path,

@@ -144,6 +144,18 @@ def test_no_contact_touch_is_not_evaluated(tmp_path: Path,
     assert GREEN not in r.html
 
 
+def test_run_stopped_at_its_first_touch(tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """The machine alarmed on no contact at the first touch: NOT EVALUATED, 11."""
+    log = tmp_path / "stopped.log"
+    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH1 1\n")
+    r = run(log, sphere_spec(tmp_path), tmp_path, capsys)
+    assert r.code == ExitCode.INCOMPLETE
+    assert (r.doc["status"], r.feature("SPH1")["status"]) == ("NOT EVALUATED",) * 2
+    assert r.csv_status("SPH1", "P_FTU") == "NOT EVALUATED"
+    assert GREEN not in r.html
+
+
 def test_a_no_contact_touch_measured_again_counts(tmp_path: Path,
                                                   capsys: pytest.CaptureFixture[str]) -> None:
     """A resumed program that touched the point again after its ERR NOTOUCH: OK."""
