@@ -353,6 +353,8 @@ def test_lines_and_planes_alone_are_ingested(faces_log: Path, tmp_path: Path,
     assert (t["DIST"]["lower"], t["DIST"]["upper"], e["ANGLE"]["upper"]) == (-0.5, 0.5, 1.0)
     assert r.csv_status("TOP", "DIST") == "OK" and r.csv_status("EDGE", "FORM") == "-"
     assert "TOP      DIST" in r.table and '<table class="chars" id="chars-EDGE">' in r.html
+    assert "(line, plane): distance of each contact point" in r.html
+    assert "from the least-squares sphere" not in r.html
     assert '<span class="badge ok" id="run-status">OK</span>' in r.html
 
 
