@@ -255,7 +255,8 @@ def test_qif_marks_a_partial_sphere_not_analyzed(tmp_path: Path) -> None:
     spec = sphere_spec(tmp_path, tolerance="tolerance = { form = 0.01, position = 2.0 }\n")
     target = tmp_path / "r.qif"
     assert main(["qif", str(edited_log(tmp_path, drop=cut)), "--spec", str(spec),
-                 "-o", str(target)]) == ExitCode.OK
+                 "-o", str(target), "--validate", "--schema",
+                 str(SHARED / "ref/qif/schema")]) == ExitCode.OK
     text = target.read_text()
     assert text.count("<CharacteristicStatusEnum>NOT_ANALYZED</CharacteristicStatusEnum>") == 2
     assert "<InspectionStatusEnum>NOT_MEASURED</InspectionStatusEnum>" in text
