@@ -3,8 +3,10 @@
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
 collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
 tolerance (``ingest``: not accepted under the ISO 14253-1 decision rule, see
-``docs/results.md``), 9 capture ended without the end marker, 10 the simulated program alarmed,
-64 usage.
+``docs/results.md``), 9 capture ended without the end marker, 10 the simulated program
+alarmed, 11 incomplete: a feature or toleranced characteristic NOT EVALUATED or the run did
+not finish (``ingest``, ``post-ingest``; 8 wins when something is also out of tolerance, see
+``probegen.cli_exit``), 64 usage.
 """
 
 from __future__ import annotations
@@ -129,14 +131,16 @@ def _post(args: argparse.Namespace) -> int:
 
 
 def _post_ingest(args: argparse.Namespace) -> int:
-    from probegen.post.evaluate import ingest_file, results_table
+    from probegen.cli_results import verdict_code
+    from probegen.post.evaluate import ingest_file, results_table, run_status
 
-    result = ingest_file(args.log, args.features)
+    log, result = ingest_file(args.log, args.features)
     Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
     sys.stdout.write(results_table(result))
+    status = run_status(log, result)
+    print(f"status: {status}{'' if log.complete else ' (the run did not finish)'}")
     print(f"wrote {args.output}")
-    failed = any(not t.in_tolerance for t in result.tolerances.values())
-    return ExitCode.NOT_OK if failed else ExitCode.OK
+    return verdict_code(status)
 
 
 def build_parser() -> argparse.ArgumentParser:

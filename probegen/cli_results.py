@@ -38,13 +38,24 @@ def _ingest(args: argparse.Namespace) -> int:
     print(f"wrote {js} and {cs}")
     if args.write_calibration:
         if not result.results:
-            raise ProbegenError("--write-calibration: expected a sphere test in the spec, "
-                                "found none")
+            skipped = [f"{n.feature} ({n.reason})" for n in result.not_evaluated
+                       if n.kind == "sphere_test"]
+            raise ProbegenError("--write-calibration: expected an evaluated sphere test, "
+                                f"found {'none' if not skipped else 'only NOT EVALUATED '}"
+                                f"{', '.join(skipped)}")
         target = Path(args.write_calibration)
         target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
                           encoding="utf-8", newline="\n")
         print(f"wrote the probe calibration {target}")
-    return ExitCode.OK if result.ok else ExitCode.NOT_OK
+    return verdict_code(result.status)
+
+
+def verdict_code(status: str) -> ExitCode:
+    """The exit code of a run's status (:mod:`probegen.cli_exit`)."""
+    from probegen.evaluate import NOT_EVALUATED, NOT_OK
+
+    return {NOT_OK: ExitCode.NOT_OK, NOT_EVALUATED: ExitCode.INCOMPLETE}.get(status,
+                                                                         ExitCode.OK)
 
 
 _PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}

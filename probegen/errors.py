@@ -125,6 +125,13 @@ class ResultsParseError(ParseError):
     """Returned data (DPRNT log, DMIS output) that does not parse."""
 
 
+class IncompleteRunError(ResultsParseError):
+    """Returned data of a run cut short (no end marker, a no-contact touch) that lacks
+    what the evaluation needs: NOT EVALUATED, exit code 11 (``cli_exit.INCOMPLETE``)."""
+
+    exit_code = 11
+
+
 def strict_error(source: str, what: str, diagnostics: tuple[Diagnostic, ...],
                  shown: int = 10) -> ResultsParseError:
     """The error a reader raises in strict mode: the first ``shown`` diagnostics in full."""

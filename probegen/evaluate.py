@@ -12,7 +12,9 @@ sphere look smaller), and the effective radius in each measured direction is
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -22,6 +24,13 @@ from probegen.geometry.fits import SphereFit, fit_sphere
 from probegen.uncertainty import COVERAGE_FACTOR, Budget, decide, verdict
 
 Vec3 = tuple[float, float, float]
+
+OK, NOT_OK, NOT_EVALUATED, UNTOLERANCED = "OK", "NOT OK", "NOT EVALUATED", "-"
+"""The status strings of a characteristic, a feature and a run (``results.json``
+``status``, ``results.csv``, the table, the report): within its limits; out of them;
+toleranced but not evaluated (missing or no-contact touches, a failed fit, a run cut
+short); not toleranced (a run: nothing toleranced at all)."""
+STATUSES = (OK, NOT_OK, NOT_EVALUATED, UNTOLERANCED)
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,6 +79,75 @@ class Characteristic:
         lo = -math.inf if self.lower is None else self.lower
         hi = math.inf if self.upper is None else self.upper
         return lo <= self.deviation <= hi
+
+
+def status_of(ok: bool | None) -> str:
+    """The status string of a verdict of an evaluated characteristic or feature."""
+    return UNTOLERANCED if ok is None else (OK if ok else NOT_OK)
+
+
+def run_status(verdicts: Iterable[bool | None], *, not_evaluated: bool,
+               complete: bool) -> str:
+    """The status of a whole run from its evaluated features' verdicts.
+
+    ``NOT OK`` as soon as one evaluated feature is out of tolerance, even when others
+    could not be evaluated: a nonconformity measured completely is a definite finding
+    that no further measurement can reverse (the part is rejected either way).  Else
+    ``NOT EVALUATED`` when a spec feature could not be evaluated or the run did not
+    finish (the run cannot be signed); else ``OK`` when something is toleranced, ``-``
+    when nothing is.
+    """
+    checks = [v for v in verdicts if v is not None]
+    if not all(checks):
+        return NOT_OK
+    if not_evaluated or not complete:
+        return NOT_EVALUATED
+    return OK if checks else UNTOLERANCED
+
+
+class Evaluated(Protocol):
+    """What every evaluated feature result has (sphere test, revolved, free-form,
+    planar)."""
+
+    @property
+    def feature(self) -> str:
+        """Feature id."""
+        ...
+
+    @property
+    def characteristics(self) -> tuple[Characteristic, ...]:
+        """The checked quantities."""
+        ...
+
+    @property
+    def ok(self) -> bool | None:
+        """All toleranced characteristics within limits (None if none is toleranced)."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class NotEvaluated:
+    """A spec feature that could not be evaluated completely: its status, and that of
+    each of its toleranced characteristics, is ``NOT EVALUATED``, never OK.
+
+    Attributes:
+        feature: feature id.
+        kind: feature kind (``sphere_test``, ``cylinder``, ``plane`` ...).
+        reason: why, for people (``no touch for points 17-18``, ``no contact at point
+            5 (ERR NOTOUCH, line 12)``, the fit's error ...).
+        characteristics: names of the toleranced characteristics the spec asks for
+            (as an evaluation would name them).
+        limits: the ``(lower, upper)`` limits of each of ``characteristics``.
+        partial: the fit of the touches there were, when they sufficed for one: shown
+            for information only, its verdicts do not count.
+    """
+
+    feature: str
+    kind: str
+    reason: str
+    characteristics: tuple[str, ...] = ()
+    limits: tuple[tuple[float | None, float | None], ...] = ()
+    partial: Evaluated | None = None
 
 
 @dataclass(frozen=True, slots=True)

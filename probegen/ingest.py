@@ -16,16 +16,25 @@ import csv
 import io
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 from probegen.compensate import ProbeCalibration, compensate
 from probegen.errors import ProbegenError
-from probegen.evaluate import Characteristic, SphereTestResult, evaluate_sphere_test
+from probegen.evaluate import (
+    NOT_EVALUATED,
+    Characteristic,
+    Evaluated,
+    NotEvaluated,
+    SphereTestResult,
+    evaluate_sphere_test,
+    run_status,
+    status_of,
+)
 from probegen.evaluate_freeform import (
     FreeformResult,
     NominalPoint,
@@ -33,6 +42,7 @@ from probegen.evaluate_freeform import (
     complete_guides,
     evaluate_freeform,
 )
+from probegen.evaluate_planar import PlanarResult, evaluate_planar
 from probegen.evaluate_revolved import (
     MIN_SECTIONS,
     Nominal,
@@ -42,7 +52,7 @@ from probegen.evaluate_revolved import (
 from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
-from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
+from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec, SphereTest
 from probegen.spec_actions import PlanarSpec
 from probegen.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
 
@@ -63,14 +73,18 @@ class Ingested:
     Attributes:
         source: the log file.
         log: the parsed log (with its diagnostics).
-        results: one evaluated result per spec feature that has touches.
+        results: one evaluated result per sphere test with all its touches.
         notes: problems found while matching (missing touches, alarms in the log).
         path: the planned stylus path at nominal, as (feature, kind, start, end) segments
             (kind: rapid, protected, or touch ...), for the report.
-        revolved: one evaluated result per revolved feature (method M2) with touches.
+        revolved: one evaluated result per revolved feature (method M2) with all its
+            touches.
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
-        freeform: one evaluated result per free-form feature with touches.
+        freeform: one evaluated result per free-form feature with all its touches.
+        planar: one evaluated result per line and plane with all its touches.
+        not_evaluated: every other spec feature: too few or no-contact touches, a
+            failed fit, a run cut short before it (``NOT EVALUATED``).
         rule: the ISO 14253-1 decision rule of the verdicts (``simple``, ``guard_band``).
         budget: the stated uncertainty contributions the characteristics' ``u`` used.
     """
@@ -83,8 +97,22 @@ class Ingested:
     revolved: tuple[RevolvedResult, ...] = ()
     decisions: tuple[Decision, ...] = ()
     freeform: tuple[FreeformResult, ...] = ()
+    planar: tuple[PlanarResult, ...] = ()
+    not_evaluated: tuple[NotEvaluated, ...] = ()
     rule: str = "simple"
     budget: Budget = Budget()
+
+    @property
+    def evaluated(self) -> tuple[Evaluated, ...]:
+        """Every completely evaluated feature, by kind (sphere tests, revolved,
+        free-form, planar), each in spec order."""
+        return (*self.results, *self.revolved, *self.freeform, *self.planar)
+
+    @property
+    def status(self) -> str:
+        """The run's status (:func:`probegen.evaluate.run_status`)."""
+        return run_status((accepted(r.characteristics, self.rule) for r in self.evaluated),
+                          not_evaluated=bool(self.not_evaluated), complete=self.log.complete)
 
     @property
     def uncertainty_notes(self) -> tuple[str, ...]:
@@ -98,9 +126,8 @@ class Ingested:
     @property
     def ok(self) -> bool:
         """No evaluated feature fails its verdict under ``rule``."""
-        rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
-            *self.results, *self.revolved, *self.freeform]
-        return not any(accepted(r.characteristics, self.rule) is False for r in rs)
+        return not any(accepted(r.characteristics, self.rule) is False
+                       for r in self.evaluated)
 
 
 def budget_of(spec: Spec, calibration: ProbeCalibration | None) -> Budget:
@@ -117,80 +144,187 @@ def accepted(characteristics: Sequence[Characteristic], rule: str) -> bool | Non
     return all(found) if found else None
 
 
+Outcome = Evaluated | NotEvaluated
+
+
+class _Gaps:
+    """Which planned touches of a feature are missing or reported no contact.
+
+    A no-contact touch is an ``ERR NOTOUCH`` record not followed by a touch of the
+    same point (a resumed program that measured it again)."""
+
+    def __init__(self, log: DprntLog, touches: Touches) -> None:
+        self.touches = touches
+        lines = {(t.feature, t.index): t.line for t in log.latest_touches() if t.kind == "PT"}
+        self.notouch = {(e.feature, e.index): e.line for e in log.errors
+                        if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
+
+    def reason(self, feature: str, indices: Sequence[int], *, missing_too: bool = True
+               ) -> str:
+        """Why the feature is incomplete ("" when every touch is there); only the
+        no-contact touches unless ``missing_too``."""
+        blind = [k for k in indices if (feature, k) in self.notouch]
+        missing = [k for k in indices if (feature, k) not in self.touches and k not in blind]
+        why = [f"no contact at point {k} (ERR NOTOUCH, line {self.notouch[(feature, k)]})"
+               for k in blind]
+        if missing and missing_too:
+            why.append(f"no touch for point{'s' if len(missing) > 1 else ''} "
+                       f"{_ranges(missing)}")
+        return "; ".join(why)
+
+
 def ingest(log_path: str | Path, spec: Spec, *,
            calibration: ProbeCalibration | None = None, with_path: bool = False,
            decision_rule: str | None = None) -> Ingested:
-    """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for.
+    """Read a DPRNT log and evaluate every feature of ``spec``: completely, or as
+    ``NOT EVALUATED`` with the reason.
 
     ``with_path`` also plans the whole program again (with its collision check) to
     record the nominal stylus path for the report.  ``decision_rule`` overrides the
     spec's ``[evaluation] decision_rule``.
-    """
-    from probegen.planning.sphere_test import plan_points, resolve_sphere
 
+    Raises:
+        ProbegenError: the log holds no touch of any feature of the spec, and no alarm
+            of one (a run stopped at its first touch is NOT EVALUATED).
+    """
     log = read_dprnt(log_path)
     notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
              for e in log.errors]
     if not log.complete:
         notes.append("the log has no PGEND line: the program did not finish")
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
-    results = []
-    revolved: list[RevolvedResult] = []
-    freeform: list[FreeformResult] = []
-    budget = budget_of(spec, calibration)
-    for feature in spec.features:
-        if isinstance(feature, RevolvedSpec):
-            found_r = _revolved(feature, spec, touches, notes, budget)
-            if found_r is not None:
-                revolved.append(found_r)
-            continue
-        if isinstance(feature, FreeformSpec):
-            found_f = ingest_freeform(feature, spec, touches, notes, calibration)
-            if found_f is not None:
-                freeform.append(found_f)
-            continue
-        if isinstance(feature, PlanarSpec):  # lines and planes: decisions only
-            continue
-        sphere = resolve_sphere(feature, spec.model)
-        plan = plan_points(feature, sphere, spec.machine)
-        found = [k for k in range(1, len(plan.directions) + 1) if (feature.id, k) in touches]
-        missing = sorted(set(range(1, len(plan.directions) + 1)) - set(found))
-        if missing:
-            notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
-        if len(found) < MIN_POINTS:
-            notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "
-                         f"(at least {MIN_POINTS} needed)")
-            continue
-        centres = np.array([touches[(feature.id, k)] for k in found])
-        normals = np.array([plan.directions[k - 1] for k in found])
-        r = spec.machine.probe.ball_radius if calibration is None else calibration
-        points = compensate(centres, normals, r)
-        tol = feature.tolerance
-        results.append(evaluate_sphere_test(
-            feature.id, points, normals, nominal_centre=sphere.centre,
-            calibrated_diameter=sphere.diameter,
-            ball_radius=r if isinstance(r, float) else r.effective_radius,
-            form=tol.form, size=tol.size, position=tol.position, budget=budget))
-    if not results and not revolved and not freeform:
+    ids = {f.id for f in spec.features}
+    if not any(f in ids for f, _ in touches) and not any(e.feature in ids
+                                                          for e in log.errors):
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
+    gaps = _Gaps(log, touches)
+    budget = budget_of(spec, calibration)
+    outcomes: list[Outcome] = []
+    for feature in spec.features:
+        if isinstance(feature, RevolvedSpec):
+            outcomes.append(_revolved(feature, spec, touches, notes, gaps, budget))
+        elif isinstance(feature, FreeformSpec):
+            outcomes.append(ingest_freeform(feature, spec, touches, notes, calibration,
+                                            gaps))
+        elif isinstance(feature, PlanarSpec):
+            outcomes.append(_planar(feature, spec, touches, gaps, calibration))
+        else:
+            outcomes.append(_sphere_test(feature, spec, touches, notes, gaps, calibration,
+                                         budget))
     path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
     if with_path:
         from probegen.planning import plan_program
 
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
-    return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
-                    decisions(spec, log), tuple(freeform), decision_rule or spec.decision_rule,
-                    budget)
+    return Ingested(str(log_path), log, _only(outcomes, SphereTestResult), tuple(notes),
+                    path, _only(outcomes, RevolvedResult), decisions(spec, log),
+                    _only(outcomes, FreeformResult), _only(outcomes, PlanarResult),
+                    _only(outcomes, NotEvaluated), decision_rule or spec.decision_rule, budget)
+
+
+T = TypeVar("T")
+
+
+def _only(outcomes: Sequence[object], kind: type[T]) -> tuple[T, ...]:
+    return tuple(o for o in outcomes if isinstance(o, kind))
+
+
+def _judge(feature: str, kind: str, reason: str,
+           names: Sequence[tuple[str, float | None, float | None]],
+           evaluate: Callable[[], Evaluated] | None) -> Outcome:
+    """The outcome of one feature: ``evaluate()`` when nothing is missing, else NOT
+    EVALUATED for ``reason`` (with the fit of the touches there are, when ``evaluate``
+    is given and succeeds, for information).  A failed fit is NOT EVALUATED too."""
+    def not_evaluated(why: str, partial: Evaluated | None) -> NotEvaluated:
+        return NotEvaluated(feature, kind, why, tuple(n for n, _, _ in names),
+                            tuple((lo, hi) for _, lo, hi in names), partial)
+
+    if evaluate is None:
+        return not_evaluated(reason, None)
+    try:
+        result = evaluate()
+    except ProbegenError as exc:
+        return not_evaluated("; ".join(w for w in (reason, f"the fit failed: {exc}") if w),
+                             None)
+    return not_evaluated(reason, result) if reason else result
+
+
+def _limits(*pairs: tuple[str, tuple[float | None, float | None] | None]
+            ) -> list[tuple[str, float | None, float | None]]:
+    """The toleranced characteristics among ``(name, limits or None)``."""
+    return [(n, lim[0], lim[1]) for n, lim in pairs if lim is not None]
+
+
+def _sym(limit: float | None) -> tuple[float | None, float | None] | None:
+    return None if limit is None else (-limit, limit)
+
+
+def _upper(limit: float | None) -> tuple[float | None, float | None] | None:
+    return None if limit is None else (None, limit)
+
+
+def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[str],
+                 gaps: _Gaps, calibration: ProbeCalibration | None, budget: Budget
+                 ) -> Outcome:
+    """Evaluate a sphere test (method M1) from its touches."""
+    from probegen.planning.sphere_test import plan_points, resolve_sphere
+
+    sphere = resolve_sphere(feature, spec.model)
+    plan = plan_points(feature, sphere, spec.machine)
+    planned = range(1, len(plan.directions) + 1)
+    found = [k for k in planned if (feature.id, k) in touches]
+    missing = sorted(set(planned) - set(found))
+    if missing:
+        notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+    tol = feature.tolerance
+    names = _limits(("POS", _upper(tol.position)), ("D", _sym(tol.size)),
+                    ("P_FTU", _upper(tol.form)), ("P_STU", _sym(tol.size)))
+    reason = gaps.reason(feature.id, planned)
+
+    def evaluate() -> SphereTestResult:
+        centres = np.array([touches[(feature.id, k)] for k in found])
+        normals = np.array([plan.directions[k - 1] for k in found])
+        r = spec.machine.probe.ball_radius if calibration is None else calibration
+        return evaluate_sphere_test(
+            feature.id, compensate(centres, normals, r), normals,
+            nominal_centre=sphere.centre, calibrated_diameter=sphere.diameter,
+            ball_radius=r if isinstance(r, float) else r.effective_radius,
+            form=tol.form, size=tol.size, position=tol.position, budget=budget)
+
+    if len(found) < MIN_POINTS:
+        notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "
+                     f"(at least {MIN_POINTS} needed)")
+        return _judge(feature.id, "sphere_test", reason, names, None)
+    return _judge(feature.id, "sphere_test", reason, names, evaluate)
+
+
+def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
+            calibration: ProbeCalibration | None) -> Outcome:
+    """Evaluate a line or plane from its touches (``evaluate_planar``)."""
+    from probegen.planning.actions import planar_fit
+    from probegen.planning.planar import plan_planar
+
+    check = planar_fit(plan_planar(feature, spec.model, spec.machine), spec.machine)
+    tol = feature.tolerance
+    names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)))
+    planned = range(1, len(feature.contacts) + 1)
+    reason = gaps.reason(feature.id, planned)
+    balls = {k: touches[(feature.id, k)] for k in planned if (feature.id, k) in touches}
+    return _judge(feature.id, feature.kind, reason, names, None if reason else (
+        lambda: evaluate_planar(check, balls, radius=calibration)))
 
 
 def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
-                    calibration: ProbeCalibration | None = None) -> FreeformResult | None:
+                    calibration: ProbeCalibration | None = None,
+                    gaps: _Gaps | None = None) -> Outcome:
     """Evaluate one free-form feature from ball centres by (feature, touch index).
 
     The feature is planned again (with its collision checks) for the theoretical contact
-    points and normals; guide points missing a touch are left out with a note.
+    points and normals; a guide point missing a touch (or, with ``gaps``, one with a
+    no-contact touch) makes the feature NOT EVALUATED, with the other guide points'
+    deviations for information.
     """
     from probegen.planning import make_setup
     from probegen.planning.freeform_spec import plan_freeform
@@ -199,18 +333,23 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
     nominal = [NominalPoint(t.guide, t.contact, t.normal) for t in plan.touches
                if t.role == 0]
     full, missing = complete_guides(feature.id, feature.method, nominal, touches)
+    lim = feature.deviation
+    names = [] if lim is None else [(f"E{p.guide}", lim[0], lim[1]) for p in nominal]
+    reason = "" if gaps is None else gaps.reason(
+        feature.id, [t.index for t in plan.touches], missing_too=False)
     if missing:
         notes.append(f"feature {feature.id}: guide points {_ranges(missing)} lack touches, "
                      "not evaluated")
+        reason = "; ".join(w for w in (reason, f"guide points {_ranges(missing)} lack "
+                                               "touches") if w)
     if not full:
         notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
                      "touches")
-        return None
+        return _judge(feature.id, "freeform", reason, names, None)
     r = spec.machine.probe.ball_radius if calibration is None else calibration
-    return evaluate_freeform(feature.id, feature.method, full, touches,
-                             direction=feature.direction, radius=r,
-                             deviation=feature.deviation,
-                             budget=budget_of(spec, calibration))
+    return _judge(feature.id, "freeform", reason, names, lambda: evaluate_freeform(
+        feature.id, feature.method, full, touches, direction=feature.direction, radius=r,
+        deviation=feature.deviation, budget=budget_of(spec, calibration)))
 
 
 def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
@@ -243,29 +382,32 @@ def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = Non
         ProbegenError: the file cannot be read, or holds no free-form touches of the spec.
     """
     output = read_dmis_output(path)
-    results, notes = ingest_dmis_freeform(output, spec)
-    if not results:
+    outcomes, notes = ingest_dmis_freeform(output, spec)
+    if not any(isinstance(o, FreeformResult) or (
+            isinstance(o, NotEvaluated) and o.partial is not None) for o in outcomes):
         raise ProbegenError(f"{path}: expected point actuals FA(<id>_<k>) of the spec's "
                             "free-form features, found none usable; " + "; ".join(notes))
     log = DprntLog(str(path), None, (), (), (), bool(output.features), 0, output.diagnostics)
-    return Ingested(str(path), log, (), notes, freeform=results,
+    return Ingested(str(path), log, (), notes, freeform=_only(outcomes, FreeformResult),
+                    not_evaluated=_only(outcomes, NotEvaluated),
                     rule=decision_rule or spec.decision_rule, budget=budget_of(spec, None))
 
 
-def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[FreeformResult, ...],
+def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Outcome, ...],
                                                                    tuple[str, ...]]:
     """Evaluate the free-form features of ``spec`` from a DMIS output file (the CMM
-    evaluates the other kinds itself); returns the results and the notes."""
+    evaluates the other kinds itself); returns the outcomes and the notes."""
     touches = dmis_touches(output, spec)
     notes: list[str] = []
     found = [ingest_freeform(f, spec, touches, notes) for f in spec.features
              if isinstance(f, FreeformSpec)]
-    return tuple(r for r in found if r is not None), tuple(notes)
+    return tuple(found), tuple(notes)
 
 
-def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
-              notes: list[str], budget: Budget) -> RevolvedResult | None:
-    """Evaluate a revolved feature from its touches (too few, or a failed fit: a note)."""
+def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[str],
+              gaps: _Gaps, budget: Budget) -> Outcome:
+    """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
+    without contact, too few to fit, or a failed fit)."""
     from probegen.planning.revolved_spec import plan_revolved
 
     plan = plan_revolved(feature, spec.model, spec.machine, spec.clearance_z)
@@ -274,21 +416,39 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], 
     missing = sorted(set(indices) - set(found))
     if missing:
         notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+    nominal = nominal_of(plan)
+    names = _revolved_names(feature, len(nominal.sections))
+    reason = gaps.reason(feature.id, indices)
     least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
     which = [plan.section_of_touch[k] for k in found]
     if len(found) < least or len(set(which)) < sections:
         notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches in "
                      f"{len(set(which))} sections (at least {least} needed"
                      f"{f', in {sections} sections' if sections > 1 else ''})")
-        return None
-    try:
-        return evaluate_revolved(
-            feature.id, nominal_of(plan), [touches[(feature.id, k)] for k in found], which,
-            ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance,
-            budget=budget)
-    except ProbegenError as exc:
-        notes.append(f"feature {feature.id}: not evaluated: {exc}")
-        return None
+        return _judge(feature.id, feature.kind, reason, names, None)
+    outcome = _judge(feature.id, feature.kind, reason, names, lambda: evaluate_revolved(
+        feature.id, nominal, [touches[(feature.id, k)] for k in found], which,
+        ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance,
+        budget=budget))
+    if isinstance(outcome, NotEvaluated) and outcome.partial is None:
+        notes.append(f"feature {feature.id}: not evaluated: {outcome.reason}")
+    return outcome
+
+
+def _revolved_names(feature: RevolvedSpec, sections: int
+                    ) -> list[tuple[str, float | None, float | None]]:
+    """The toleranced characteristics of a revolved feature, in the order
+    ``evaluate_revolved`` gives them."""
+    t, kind = feature.tolerance, feature.kind
+    per_section: list[tuple[str, tuple[float | None, float | None] | None]] = []
+    if kind in ("cylinder", "cone"):
+        for j in range(1, sections + 1):
+            per_section += [(f"D_S{j}", t.diameter), (f"RON_S{j}", _upper(t.roundness))]
+    return _limits(("POS", _upper(t.position)),
+                   ("D", None if kind == "cone" else t.diameter),
+                   ("ANGLE", t.angle if kind == "cone" else None), *per_section,
+                   ("TAPER", _sym(t.taper) if kind == "cylinder" else None),
+                   ("FORM", _upper(t.form)))
 
 
 def nominal_of(plan: Any) -> Nominal:
@@ -322,17 +482,22 @@ def _f(x: float) -> float:
 
 
 def to_json(ing: Ingested) -> str:
-    """``results.json``: repeatable text (fixed rounding to 1e-7 mm)."""
+    """``results.json``: repeatable text (fixed rounding to 1e-7 mm).
+
+    ``status`` (run, feature, characteristic) is one of ``OK``, ``NOT OK``, ``NOT
+    EVALUATED``, ``-`` (:mod:`probegen.evaluate`); ``ok`` is kept beside it (None for
+    what is not toleranced or not evaluated).  The completely evaluated features come
+    first, then the NOT EVALUATED ones with their ``reason``."""
     doc: dict[str, Any] = {
         "source": ing.source,
         "program": ing.log.program,
         "complete": ing.log.complete,
+        "status": ing.status,
         "notes": list(ing.notes),
-        "diagnostics": [str(d) for d in ing.log.diagnostics],
         "uncertainty": uncertainty_json(ing.budget, ing.rule, ing.uncertainty_notes),
-        "features": [_feature_json(r, ing.rule) for r in ing.results]
-        + [_revolved_json(r, ing.rule) for r in ing.revolved]
-        + [freeform_json(r, ing.rule) for r in ing.freeform],
+        "diagnostics": [str(d) for d in ing.log.diagnostics],
+        "features": [_evaluated_json(r, ing.rule) for r in ing.evaluated]
+        + [_not_evaluated_json(n, ing.rule) for n in ing.not_evaluated],
         "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
                   "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
     }
@@ -343,6 +508,49 @@ def to_json(ing: Ingested) -> str:
                              "limit": _f(d.limit)}
                             for d in ing.decisions]
     return json.dumps(doc, indent=2) + "\n"
+
+
+def _evaluated_json(r: Evaluated, rule: str) -> dict[str, Any]:
+    """One evaluated feature of any kind, with its ``status`` under ``rule``."""
+    if isinstance(r, SphereTestResult):
+        doc = _feature_json(r, rule)
+    elif isinstance(r, RevolvedResult):
+        doc = _revolved_json(r, rule)
+    elif isinstance(r, FreeformResult):
+        doc = freeform_json(r, rule)
+    else:
+        assert isinstance(r, PlanarResult)
+        doc = _planar_json(r, rule)
+    return _after_ok(doc, status=status_of(accepted(r.characteristics, rule)))
+
+
+def _after_ok(doc: dict[str, Any], **keys: Any) -> dict[str, Any]:
+    """``doc`` with ``keys`` set right after its ``ok`` key (replaced where present)."""
+    out: dict[str, Any] = {}
+    for k, v in doc.items():
+        if k not in keys:
+            out[k] = v
+        if k == "ok":
+            out.update(keys)
+    return out
+
+
+def _not_evaluated_json(n: NotEvaluated, rule: str) -> dict[str, Any]:
+    """A NOT EVALUATED feature: the partial fit's keys when there is one (for
+    information), every characteristic's ``ok`` None and its status NOT EVALUATED
+    (``-`` where not toleranced)."""
+    doc: dict[str, Any] = {"id": n.feature, "kind": n.kind, "ok": None, "n": 0,
+                           "characteristics": [], "points": [], "directions": [],
+                           "residuals": []}
+    if n.partial is not None:
+        doc = _evaluated_json(n.partial, rule)
+    doc["characteristics"] = [
+        {"name": name, "measured": _opt_f(measured), "nominal": _opt_f(nominal),
+         "deviation": _opt_f(deviation), "lower": _opt_f(lower), "upper": _opt_f(upper),
+         "ok": None, "status": status, "u": _opt_f(u), "U": _opt_f(big_u), "decision": None}
+        for name, measured, nominal, deviation, lower, upper, status, u, big_u, _
+        in _rows_of(n, rule)]
+    return _after_ok({**doc, "ok": None}, status=NOT_EVALUATED, reason=n.reason)
 
 
 def uncertainty_json(budget: Budget, rule: str, notes: Sequence[str]) -> dict[str, Any]:
@@ -358,16 +566,52 @@ def _opt_f(x: float | None) -> float | None:
     return None if x is None else _f(x)
 
 
+Row = tuple[str, float | None, float | None, float | None, float | None, float | None, str,
+            float | None, float | None, str | None]
+"""A characteristic as the outputs list it: name, measured, nominal, deviation, lower,
+upper, status, u, U, decision (ISO 14253-1)."""
+
+
+def _rows_of(r: Evaluated | NotEvaluated, rule: str) -> list[Row]:
+    """The characteristic rows of one feature (statuses under ``rule``); a NOT EVALUATED
+    feature: its partial fit's (toleranced ones NOT EVALUATED), then its other
+    toleranced characteristics without values."""
+    if not isinstance(r, NotEvaluated):
+        return [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
+                 status_of(c.accepted(rule)), c.u, c.U, c.decision)
+                for c in r.characteristics]
+    chars = () if r.partial is None else r.partial.characteristics
+    rows: list[Row] = [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
+                        "-" if c.ok is None else NOT_EVALUATED, c.u, c.U, None)
+                       for c in chars]
+    shown = {c.name for c in chars}
+    rows += [(name, None, None, None, lo, hi, NOT_EVALUATED, None, None, None)
+             for name, (lo, hi) in zip(r.characteristics, r.limits, strict=True)
+             if name not in shown]
+    return rows
+
+
+def _planar_json(r: PlanarResult, rule: str) -> dict[str, Any]:
+    return {
+        "id": r.feature,
+        "kind": r.kind,
+        "ok": accepted(r.characteristics, rule),
+        "n": len(r.points),
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
+    }
+
+
 def _measured_json(characteristics: Any, points: Any, directions: Any,
                    residuals: Any, rule: str) -> dict[str, Any]:
-    """The part of a feature's JSON every kind shares: checks (``ok`` is the verdict under
-    ``rule``), points, normals, residuals."""
+    """The part of a feature's JSON every kind shares: checks (``ok`` and ``status``
+    are the verdict under ``rule``), points, normals, residuals."""
     return {
         "characteristics": [
             {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
-             "deviation": _f(c.deviation),
-             "lower": _opt_f(c.lower), "upper": _opt_f(c.upper), "ok": c.accepted(rule),
-             "u": _opt_f(c.u), "U": _opt_f(c.U), "decision": c.decision}
+             "deviation": _f(c.deviation), "lower": _opt_f(c.lower),
+             "upper": _opt_f(c.upper), "ok": c.accepted(rule),
+             "status": status_of(c.accepted(rule)), "u": _opt_f(c.u), "U": _opt_f(c.U),
+             "decision": c.decision}
             for c in characteristics
         ],
         "points": [[_f(v) for v in p] for p in points],
@@ -429,61 +673,68 @@ def freeform_json(r: FreeformResult, rule: str = "simple") -> dict[str, Any]:
     }
 
 
-def _status(ok: bool | None) -> str:
-    return "-" if ok is None else ("OK" if ok else "NOT OK")
-
-
 def _tol(lo: float | None, hi: float | None) -> str:
     if lo is None and hi is None:
         return "-"
     if lo is None:
         return f"<= {hi:.4f}"
+    if hi is None:
+        return f">= {lo:.4f}"
     return f"{lo:+.4f}/{hi:+.4f}"
 
 
+def _all_rows(ing: Ingested) -> list[tuple[str, Row]]:
+    """Every characteristic row of every feature; a NOT EVALUATED feature without any
+    is one row named ``-``."""
+    out: list[tuple[str, Row]] = []
+    features: list[Evaluated | NotEvaluated] = [*ing.evaluated, *ing.not_evaluated]
+    for r in features:
+        rows = _rows_of(r, ing.rule) or [
+            ("-", None, None, None, None, None, NOT_EVALUATED, None, None, None)]
+        out += [(r.feature, row) for row in rows]
+    return out
+
+
+def _num(x: float | None, fmt: str) -> str:
+    return "" if x is None else format(x, fmt)
+
+
 def to_csv(ing: Ingested) -> str:
-    """``results.csv``: one row per characteristic."""
+    """``results.csv``: one row per characteristic (``status``: see :func:`to_json`)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
                 "upper", "status", "u", "U", "decision"])
-    rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
-        *ing.results, *ing.revolved, *ing.freeform]
-    for r in rs:
-        for c in r.characteristics:
-            w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
-                        f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
-                        "" if c.upper is None else f"{c.upper:.4f}",
-                        _status(c.accepted(ing.rule)), _num(c.u, "", 5), _num(c.U, "", 4),
-                        c.decision or ""])
+    for feature, (name, measured, nominal, deviation, lo, hi, status, u, big_u,
+                  decision) in _all_rows(ing):
+        w.writerow([feature, name, _num(measured, ".4f"), _num(nominal, ".4f"),
+                    _num(deviation, ".4f"), _num(lo, ".4f"), _num(hi, ".4f"), status,
+                    _num(u, ".5f"), _num(big_u, ".4f"), decision or ""])
     return buf.getvalue()
 
 
 def to_table(ing: Ingested) -> str:
-    """The table ``probegen ingest`` prints."""
+    """The table ``probegen ingest`` prints, each NOT EVALUATED feature's reason and
+    the run's status."""
     rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status",
              "U", "decision")]
-    rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
-        *ing.results, *ing.revolved, *ing.freeform]
-    for r in rs:
-        for c in r.characteristics:
-            rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
-                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper),
-                         _status(c.accepted(ing.rule)), _num(c.U, "-", 4),
-                         c.decision or "-"))
+    for feature, (name, measured, nominal, deviation, lo, hi, status, _, big_u,
+                  decision) in _all_rows(ing):
+        rows.append((feature, name, _num(measured, ".4f") or "-", _num(nominal, ".4f") or "-",
+                     _num(deviation, "+.4f") or "-", _tol(lo, hi), status,
+                     _num(big_u, ".4f") or "-", decision or "-"))
     text = _columns(rows)
     text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
              f"{ing.rule} (ISO 14253-1)\n")
     text += "".join(f"{note}\n" for note in ing.uncertainty_notes)
+    for n in ing.not_evaluated:
+        text += f"{n.feature}: NOT EVALUATED: {n.reason}\n"
     if ing.decisions:
         text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
             (d.feature, d.key, _opt(d.offline), _opt(d.machine),
              {None: "-", True: "yes", False: "NO"}[d.agrees]) for d in ing.decisions])
-    return text
-
-
-def _num(x: float | None, none: str, digits: int) -> str:
-    return none if x is None else f"{x:.{digits}f}"
+    finished = "" if ing.log.complete else " (the run did not finish)"
+    return text + f"status: {ing.status}{finished}\n"
 
 
 def _opt(x: float | None) -> str:

@@ -104,7 +104,10 @@ def _planar(check: Check, pts: np.ndarray) -> dict[str, float]:
     axis = int(np.argmax(np.abs(check.normal)))
     s = 1.0 if check.normal[axis] > 0 else -1.0
     p = float(pts[:, axis].mean()) - s * check.ball_radius
-    out = {"P": p, "E": s * (p - check.nominal[axis])}
+    # E along the whole normal (the program's s·(P − nominal) for a face square to an
+    # axis, the only kind with run-time actions; ingest evaluates every face with it)
+    e = float(np.mean((pts - np.asarray(check.nominal)) @ np.asarray(check.normal)))
+    out = {"P": p, "E": e - check.ball_radius}
     if check.fit == "line":
         direction = fit_line_2d(pts[:, :2]).direction
         phi = math.degrees(math.atan2(direction[1], direction[0])) % 180.0

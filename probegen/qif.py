@@ -84,7 +84,8 @@ def ingested_to_qif(ing: Ingested, *, spec: Spec | None = None,
     """
     from probegen.qif_sphere import sphere_results_qif
 
-    if not (ing.results or ing.revolved or ing.freeform):
+    if not (ing.results or ing.revolved or ing.freeform) and not any(
+            n.kind == "sphere_test" and n.partial is not None for n in ing.not_evaluated):
         raise ProbegenError(f"{ing.source}: expected evaluated features to export, found none")
     return sphere_results_qif(ing, spec=spec, application=APPLICATION,
                               version=_version(version), created=created, qpid=qpid)

@@ -36,7 +36,7 @@ class Check:
         name: the characteristic item's name (``SPH1 D``, ``TOL4``).
         value: the measured value: the actual size, the form, or the position deviation
             as a zone diameter.
-        status: ``PASS``, ``FAIL`` or ``UNDEFINED`` (not toleranced).
+        status: ``PASS``, ``FAIL``, ``UNDEFINED`` (not toleranced) or ``NOT_ANALYZED``.
         target: the nominal size (size kinds).
         lower: lowest allowed deviation from ``target`` (size kinds), or None.
         upper: highest allowed deviation (size kinds), or None; both None: measured only.
@@ -70,9 +70,19 @@ class Links:
     device: int | None = None
 
 
-def status(ok: bool | None) -> str:
-    """QIF ``CharacteristicStatusEnum`` of a verdict: PASS, FAIL, or UNDEFINED (no limits)."""
-    return "UNDEFINED" if ok is None else ("PASS" if ok else "FAIL")
+NOT_ANALYZED = "NOT_ANALYZED"
+"""QIF ``CharacteristicStatusEnum`` of a toleranced characteristic NOT EVALUATED."""
+
+
+def status(ok: bool | None, *, evaluated: bool = True) -> str:
+    """QIF ``CharacteristicStatusEnum`` of a verdict: PASS, FAIL, or UNDEFINED (no
+    limits); NOT_ANALYZED for a toleranced characteristic of a feature that was not
+    evaluated completely (its value only informs)."""
+    if ok is None:
+        return "UNDEFINED"
+    if not evaluated:
+        return NOT_ANALYZED
+    return "PASS" if ok else "FAIL"
 
 
 def add_characteristic(b: QifBuilder, check: Check, links: Links = Links()) -> int:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.qif_chars import (
+    NOT_ANALYZED,
     Check,
     Links,
     add_characteristic,
@@ -79,8 +80,8 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
     part = _part(b, spec)
     nominals: list[int] = []
     characteristic_nominals: list[int] = []
-    for result in ing.results:
-        nominal, chars = _sphere(b, result, resources, ing.rule)
+    for result, evaluated in _spheres(ing):
+        nominal, chars = _sphere(b, result, resources, ing.rule, evaluated)
         nominals.append(nominal)
         characteristic_nominals += chars
     for revolved in ing.revolved:
@@ -89,11 +90,26 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
     for freeform in ing.freeform:
         characteristic_nominals += freeform_qif(b, freeform, resources.device,
                                                 resources.sensor, ing.rule)
+    for n in ing.not_evaluated:  # none of them may let the inspection PASS
+        b.statuses.append(NOT_ANALYZED)
+        b.notes.append(f"feature {n.feature}: NOT EVALUATED: {n.reason}")
+    if not ing.log.complete:
+        b.statuses.append(NOT_ANALYZED)
     if nominals:
         ref_list(part, "FeatureNominalIds", nominals)
     if characteristic_nominals:
         ref_list(part, "CharacteristicNominalIds", characteristic_nominals)
     return b.to_text()
+
+
+def _spheres(ing: Ingested) -> list[tuple[SphereTestResult, bool]]:
+    """The sphere tests to write, each with whether it was evaluated completely (a NOT
+    EVALUATED one is written when its touches sufficed for a fit, its toleranced
+    characteristics NOT_ANALYZED)."""
+    from probegen.evaluate import SphereTestResult
+
+    partial = [n.partial for n in ing.not_evaluated if isinstance(n.partial, SphereTestResult)]
+    return [(r, True) for r in ing.results] + [(r, False) for r in partial]
 
 
 def _resources(b: QifBuilder, ing: Ingested, spec: Spec | None) -> _Resources:
@@ -113,8 +129,9 @@ def _resources(b: QifBuilder, ing: Ingested, spec: Spec | None) -> _Resources:
         _tip(probe, p.ball_diameter, p.shank_diameter)
     else:
         sub(probe, "Name", "touch-trigger probe")
-        if ing.results:
-            _tip(probe, 2.0 * ing.results[0].ball_radius, None)
+        spheres = _spheres(ing)
+        if spheres:
+            _tip(probe, 2.0 * spheres[0][0].ball_radius, None)
     b.single("MeasurementResources", section)
     return _Resources(device_id, sensor_id)
 
@@ -138,7 +155,7 @@ def _part(b: QifBuilder, spec: Spec | None) -> ET.Element:
 
 
 def _sphere(b: QifBuilder, r: SphereTestResult, res: _Resources,
-            rule: str) -> tuple[int, list[int]]:
+            rule: str, evaluated: bool) -> tuple[int, list[int]]:
     """Write one sphere; return its feature nominal id and characteristic nominal ids."""
     definition, def_id = b.add("FeatureDefinitions", "SphereFeatureDefinition")
     sub(definition, "InternalExternal", "EXTERNAL")
@@ -153,7 +170,8 @@ def _sphere(b: QifBuilder, r: SphereTestResult, res: _Resources,
     points_id = _point_set(b, r, res)
     measured_id = _measurement(b, r, item_id, points_id)
     links = Links(nominal_id, item_id, measured_id, res.device)
-    return nominal_id, [add_characteristic(b, check, links) for check in _checks(r, rule)]
+    return nominal_id, [add_characteristic(b, check, links)
+                        for check in _checks(r, rule, evaluated)]
 
 
 def _point_set(b: QifBuilder, r: SphereTestResult, res: _Resources) -> int:
@@ -182,25 +200,29 @@ def _measurement(b: QifBuilder, r: SphereTestResult, item_id: int, points_id: in
     return ident
 
 
-def _checks(r: SphereTestResult, rule: str) -> list[Check]:
-    """The characteristics of one sphere: diameter always, form and position if toleranced."""
+def _checks(r: SphereTestResult, rule: str, evaluated: bool = True) -> list[Check]:
+    """The characteristics of one sphere: diameter always, form and position if
+    toleranced (verdicts under ``rule``; NOT_ANALYZED when the sphere was not evaluated
+    completely)."""
     by_name = {c.name: c for c in r.characteristics}
     d = by_name["D"]
     checks = [Check("SphericalDiameter", f"{r.feature} D", d.measured,
-                    status(d.accepted(rule)), target=d.nominal, lower=d.lower, upper=d.upper,
-                    u=d.u)]
+                    status(d.accepted(rule), evaluated=evaluated), target=d.nominal,
+                    lower=d.lower, upper=d.upper, u=d.u)]
     form = by_name["P_FTU"]
     if form.upper is not None:
         checks.append(Check("Sphericity", f"{r.feature} P_FTU", form.measured,
-                            status(form.accepted(rule)), zone=form.upper, u=form.u))
-    checks += _position(r.feature, by_name["POS"], rule)
+                            status(form.accepted(rule), evaluated=evaluated),
+                            zone=form.upper, u=form.u))
+    checks += _position(r.feature, by_name["POS"], rule, evaluated)
     return checks
 
 
-def _position(feature: str, pos: Characteristic, rule: str) -> list[Check]:
+def _position(feature: str, pos: Characteristic, rule: str, evaluated: bool) -> list[Check]:
     """The position check, as a spherical zone diameter (twice the centre distance)."""
     if pos.upper is None:
         return []
-    return [Check("Position", f"{feature} POS", 2.0 * pos.measured, status(pos.accepted(rule)),
-                  zone=2.0 * pos.upper, zone_shape="SphericalZone", material="NONE",
+    return [Check("Position", f"{feature} POS", 2.0 * pos.measured,
+                  status(pos.accepted(rule), evaluated=evaluated), zone=2.0 * pos.upper,
+                  zone_shape="SphericalZone", material="NONE",
                   u=None if pos.u is None else 2.0 * pos.u)]

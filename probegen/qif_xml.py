@@ -119,7 +119,8 @@ class QifBuilder:
         results_id: id of the ``MeasurementResults``.
         lists: the members of each id-bearing list, by list name.
         singles: the sections built whole by a converter (``Product`` ...).
-        statuses: every verdict (PASS/FAIL/UNDEFINED) behind ``InspectionStatus``.
+        statuses: every verdict (PASS/FAIL/UNDEFINED/NOT_ANALYZED) behind
+            ``InspectionStatus``.
         notes: written as ``MeasurementResults/Attributes`` (``AttributeStr`` "note k").
     """
 
@@ -267,9 +268,13 @@ def _results(b: QifBuilder) -> ET.Element:
 
 
 def inspection_status(statuses: Sequence[str]) -> str:
-    """The document's verdict: FAIL if any FAIL, PASS if any PASS, else UNDEFINED."""
+    """The document's verdict: FAIL if any FAIL; NOT_MEASURED if any NOT_ANALYZED (a
+    characteristic, a feature or the run not evaluated completely: never PASS); PASS if
+    any PASS; else UNDEFINED."""
     if "FAIL" in statuses:
         return "FAIL"
+    if "NOT_ANALYZED" in statuses:
+        return "NOT_MEASURED"
     return "PASS" if "PASS" in statuses else "UNDEFINED"
 
 

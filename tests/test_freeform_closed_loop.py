@@ -68,6 +68,7 @@ def run(spec: Spec, dialect: str, model: cad.Model, offset: np.ndarray,
         return ing.freeform[0]
     results, notes = ingest_dmis_freeform(parse_dmis_output(res.output, strict=True), spec)
     assert notes == ()
+    assert isinstance(results[0], FreeformResult)
     return results[0]
 
 
@@ -227,7 +228,11 @@ def test_missing_touches_leave_their_guide_point_out(in_repo: Path, tmp_path: Pa
     log = tmp_path / "cut.log"
     log.write_text("".join(x for x in lines if not x.startswith(("PT SURF 31 ", "PT SURF 50 "))))
     ing = ingest(log, spec)
-    (r,) = ing.freeform
+    # never signed with guide points missing: NOT EVALUATED, the others for information
+    (n,) = ing.not_evaluated
+    assert ing.freeform == () and n.reason == "guide points 3, 5 lack touches"
+    r = n.partial
+    assert isinstance(r, FreeformResult)
     assert 3 not in r.guides and 5 not in r.guides and len(r.guides) == 6
     assert any("guide points 3, 5 lack touches" in n for n in ing.notes)
     assert np.abs(r.residuals).max() <= BOUND["vertical2d"]

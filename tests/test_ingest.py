@@ -80,14 +80,25 @@ def test_missing_touches_are_noted(in_repo: Path, tmp_path: Path) -> None:
     result = ingest(log, load_spec(SPEC))
     assert result.notes == ("the log has no PGEND line: the program did not finish",
                             "feature SPH1: no touch for points 17-18")
-    assert len(result.results[0].points) == 23
+    # a partial feature is never signed: NOT EVALUATED, its 23-point fit for information
+    assert result.results == ()
+    (n,) = result.not_evaluated
+    assert (n.feature, n.reason) == ("SPH1", "no touch for points 17-18")
+    assert n.partial is not None and len(n.partial.points) == 23 and result.status == \
+        "NOT EVALUATED"
 
 
 def test_a_log_without_touches_is_an_error(in_repo: Path, tmp_path: Path) -> None:
     log = tmp_path / "empty.log"
-    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH1 1\n")
-    with pytest.raises(ProbegenError, match="found none usable.*ERR NOTOUCH SPH1 1"):
+    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH9 1\n")
+    with pytest.raises(ProbegenError, match="found none usable.*ERR NOTOUCH SPH9 1"):
         ingest(log, load_spec(SPEC))
+    # a run of this spec stopped at its first touch is not an input error: NOT EVALUATED
+    log.write_text("%\nPGSTART O1001 V1\nERR NOTOUCH SPH1 1\n")
+    ing = ingest(log, load_spec(SPEC))
+    assert ing.status == "NOT EVALUATED"
+    assert ing.not_evaluated[0].reason == ("no contact at point 1 (ERR NOTOUCH, line 3); "
+                                           "no touch for points 2-25")
 
 
 def test_capture_then_ingest_over_a_pty(in_repo: Path, tmp_path: Path,

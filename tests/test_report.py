@@ -84,9 +84,10 @@ def test_summary_table_holds_the_values(page: str) -> None:
 def test_tolerances_colour_the_status(results: dict[str, Any]) -> None:
     doc = json.loads(json.dumps(results))
     chars = doc["features"][0]["characteristics"]
-    chars[5].update(upper=0.001, ok=False)        # P_FTU 0.0016 > 0.001
-    chars[4].update(lower=-0.002, upper=0.002, ok=True)
-    doc["features"][0]["ok"] = False
+    chars[5].update(upper=0.001, ok=False, status="NOT OK")        # P_FTU 0.0016 > 0.001
+    chars[4].update(lower=-0.002, upper=0.002, ok=True, status="OK")
+    doc["features"][0].update(ok=False, status="NOT OK")
+    doc["status"] = "NOT OK"
     html = render_report(doc)
     assert re.search(r'<tr class="nok"><th scope="row">P_FTU</th>.*?NOT OK</td>', html)
     assert re.search(r'<tr class="ok"><th scope="row">D</th>.*?-0.0020 / \+0.0020.*?OK</td>',
@@ -99,7 +100,8 @@ def test_summary_shows_U_and_the_iso_14253_decision(results: dict[str, Any],
     d = next(c for c in ingested.results[0].characteristics if c.name == "D")
     doc = json.loads(json.dumps(results))
     chars = doc["features"][0]["characteristics"]
-    chars[4].update(lower=-0.0008 - 0.5 * d.U, upper=0.01, ok=True, decision="undecided")
+    chars[4].update(lower=-0.0008 - 0.5 * d.U, upper=0.01, ok=True, status="OK",
+                    decision="undecided")
     html = render_report(doc)
     row = re.search(r'<th scope="row">D</th>(.*?)</tr>', html)
     assert row is not None

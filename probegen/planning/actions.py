@@ -81,6 +81,14 @@ def planar_check(p: PlanarPlan, machine: MachineProfile) -> tuple[str, Check | N
         raise SpecError(f"{feature.where}.set_work_offset.axes: expected {letter!r} (the "
                         f"axis of the face's normal), found {w.axes!r}")
     axes = "XY" if feature.kind == "line" else letter
+    return axes, planar_fit(p, machine, axes)
+
+
+def planar_fit(p: PlanarPlan, machine: MachineProfile, axes: str = "XYZ") -> Check:
+    """The ``Check`` of a line or plane: its fit, nominal and limits, with the touches
+    stored in ``axes``.  The program runs it for a feature with actions; ``ingest``
+    evaluates every line and plane with it offline, actions or not."""
+    feature = p.spec
     points = tuple(point_names(feature.id, k, axes) for k in range(1, len(p.starts) + 1))
     t = feature.tolerance
     limits = []
@@ -91,10 +99,9 @@ def planar_check(p: PlanarPlan, machine: MachineProfile) -> tuple[str, Check | N
     d = p.definition
     direction = direction_degrees(d) if isinstance(d, ir.LineDef) else 0.0
     nominal = d.start if isinstance(d, ir.LineDef) else d.point
-    check = Check(feature.id, feature.kind, points, nominal, p.normal, 0.0, False,
-                  machine.probe.ball_radius, direction, tuple(limits),
-                  feature.actions.on_fail, feature.actions.flag)
-    return axes, check
+    return Check(feature.id, feature.kind, points, nominal, p.normal, 0.0, False,
+                 machine.probe.ball_radius, direction, tuple(limits),
+                 feature.actions.on_fail, feature.actions.flag)
 
 
 Store = tuple[str | None, str | None, str | None]

@@ -23,7 +23,7 @@ from probegen.constants import MM_PER_INCH
 from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
 from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
-from probegen.errors import ResultsParseError
+from probegen.errors import IncompleteRunError, ResultsParseError
 from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
 from probegen.results.dprnt import DprntLog, read_dprnt
 
@@ -39,8 +39,9 @@ class _Replay:
     """A ``Cmm`` whose probing moves return the logged ball centres in map order."""
 
     def __init__(self, fmap: FeatureMap, points: dict[tuple[str, int], Vec3],
-                 source: str) -> None:
+                 source: str, cut: dict[tuple[str, int], str] | None = None) -> None:
         self.fmap, self.points, self.source = fmap, points, source
+        self.cut = cut or {}
         self.used = 0
 
     @property
@@ -63,9 +64,12 @@ class _Replay:
     def _checked(self, t: PostTouch) -> Vec3:
         key = (t.id, t.index)
         if key not in self.points:
-            raise ResultsParseError(f"{self.source}: no PT {t.id} {t.index} in the log "
-                                    f"(feature {t.feature}, DMIS line {t.line}): did the "
-                                    "program run to its end?")
+            where = (f"{self.source}: no PT {t.id} {t.index} in the log (feature "
+                     f"{t.feature}, DMIS line {t.line})")
+            why = self.cut.get(key) or self.cut.get(("", 0))
+            if why:
+                raise IncompleteRunError(f"{where}: NOT EVALUATED, {why}")
+            raise ResultsParseError(f"{where}: did the program run to its end?")
         p = arr(self.points[key])
         rel = p - arr(t.start)
         along = float(rel @ arr(t.direction))
@@ -87,13 +91,15 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
         mm), evaluated tolerances, the statements skipped.
 
     Raises:
-        ResultsParseError: a touch missing or off its probing line, or extra probing.
+        ResultsParseError: a touch missing or off its probing line, or extra probing
+            (``IncompleteRunError`` for a touch missing from a run cut short or without
+            contact).
         DmisProgramError: the map's DMIS program is wrong (a changed map).
     """
     scale = MM_PER_INCH if fmap.units == "inch" else 1.0
     points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
               for t in log.latest_touches() if t.kind == "PT"}
-    replay = _Replay(fmap, points, log.source)
+    replay = _Replay(fmap, points, log.source, _cut(log))
     result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
     if replay.used != len(fmap.touches):
         raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
@@ -101,15 +107,40 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
     return result
 
 
-def ingest_file(log: str | Path, features: str | Path) -> DmisRunResult:
-    """Evaluate a captured DPRNT ``log`` with the feature map ``features``.
+def _cut(log: DprntLog) -> dict[tuple[str, int], str]:
+    """Why touches may be missing: ``ERR NOTOUCH`` points not measured again, and
+    (key ``("", 0)``) a log without ``PGEND``."""
+    lines = {(t.feature, t.index): t.line for t in log.latest_touches() if t.kind == "PT"}
+    out = {(e.feature, e.index): f"no contact (ERR NOTOUCH, line {e.line})"
+           for e in log.errors
+           if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
+    if not log.complete:
+        out[("", 0)] = "the log has no PGEND line: the program did not finish"
+    return out
+
+
+def run_status(log: DprntLog, result: DmisRunResult) -> str:
+    """The run's status (:func:`probegen.evaluate.run_status`): its tolerances'
+    verdicts; NOT EVALUATED when the log did not finish or a touch had no contact."""
+    from probegen.evaluate import run_status as status
+
+    cut = _cut(log)
+    return status((t.in_tolerance for t in result.tolerances.values()),
+                  not_evaluated=bool(cut), complete=log.complete)
+
+
+def ingest_file(log: str | Path, features: str | Path) -> tuple[DprntLog, DmisRunResult]:
+    """Evaluate a captured DPRNT ``log`` with the feature map ``features``; return the
+    log read and the evaluation.
 
     Raises:
-        ResultsParseError: the log or the map cannot be used (see ``evaluate_log``).
+        ResultsParseError: the log or the map cannot be used (see ``evaluate_log``);
+            ``IncompleteRunError`` when a touch is missing from a run cut short.
     """
     fmap = read_feature_map(features)
     parse_dmis(fmap.text, source=fmap.source)  # a damaged map fails here, located
-    return evaluate_log(read_dprnt(log), fmap)
+    read = read_dprnt(log)
+    return read, evaluate_log(read, fmap)
 
 
 def results_table(result: DmisRunResult) -> str:

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from probegen.errors import ProbegenError
+from probegen.evaluate import NOT_EVALUATED, NOT_OK, OK, UNTOLERANCED
 from probegen.report import sections
 from probegen.report.model import Characteristic, Results, read_results
 from probegen.report.numbers import fixed, signed
@@ -79,11 +80,10 @@ def write_report(results_json_path: str | Path, out_path: str | Path, *,
 
 
 def overall_status(res: Results) -> str:
-    """``OK``, ``NOT OK`` or ``not toleranced`` over all features."""
-    checks = [f.ok for f in res.features if f.ok is not None]
-    if not checks:
-        return "not toleranced"
-    return "OK" if all(checks) else "NOT OK"
+    """The run's status (``results.json`` ``status``): ``OK`` only when every
+    toleranced characteristic of the spec was evaluated and conforms, else ``NOT OK``,
+    ``NOT EVALUATED``, or ``not toleranced``."""
+    return "not toleranced" if res.status == UNTOLERANCED else res.status
 
 
 def _default_title(res: Results) -> str:
@@ -112,9 +112,9 @@ def _markup(text: str) -> Any:
     return markupsafe.Markup(text)
 
 
-def mm(value: float) -> str:
-    """A length in the table, mm."""
-    return fixed(value, DECIMALS)
+def mm(value: float | None) -> str:
+    """A length in the table, mm (``–`` when not evaluated)."""
+    return "\u2013" if value is None else fixed(value, DECIMALS)
 
 
 def expanded(value: float | None) -> str:
@@ -122,9 +122,9 @@ def expanded(value: float | None) -> str:
     return "\u2013" if value is None else mm(value)
 
 
-def deviation(value: float) -> str:
-    """A deviation in the table, signed, mm."""
-    return signed(value, DECIMALS)
+def deviation(value: float | None) -> str:
+    """A deviation in the table, signed, mm (``–`` when not evaluated)."""
+    return "\u2013" if value is None else signed(value, DECIMALS)
 
 
 def tolerance(c: Characteristic) -> str:
@@ -138,9 +138,9 @@ def tolerance(c: Characteristic) -> str:
     return f"{deviation(c.lower)} / {deviation(c.upper)}"
 
 
-def status(ok: bool | None) -> str:
-    """``OK``, ``NOT OK`` or ``–`` (not toleranced)."""
-    return "\u2013" if ok is None else ("OK" if ok else "NOT OK")
+def status(value: str) -> str:
+    """A status as the page prints it (``–`` for not toleranced)."""
+    return "\u2013" if value == UNTOLERANCED else value
 
 
 def agreement(agrees: bool | None) -> str:
@@ -148,6 +148,9 @@ def agreement(agrees: bool | None) -> str:
     return "\u2013" if agrees is None else ("agree" if agrees else "DISAGREE")
 
 
-def status_class(ok: bool | None) -> str:
-    """CSS class colouring a status."""
-    return "none" if ok is None else ("ok" if ok else "nok")
+def status_class(value: str | bool | None) -> str:
+    """CSS class colouring a status or an agreement: green ``ok`` only for ``OK`` (or
+    agreeing), amber ``ne`` for ``NOT EVALUATED``."""
+    if isinstance(value, bool) or value is None:
+        return "none" if value is None else ("ok" if value else "nok")
+    return {OK: "ok", NOT_OK: "nok", NOT_EVALUATED: "ne"}.get(value, "none")

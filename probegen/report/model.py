@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any, NoReturn
 
 from probegen.errors import ProbegenError
+from probegen.evaluate import NOT_EVALUATED, NOT_OK, OK, STATUSES, UNTOLERANCED, status_of
 
 Vec3 = tuple[float, float, float]
 
@@ -35,17 +36,19 @@ PATH_KINDS = ("rapid", "protected", "touch")
 
 @dataclass(frozen=True, slots=True)
 class Characteristic:
-    """One checked quantity of a feature (mm, or as the characteristic says); ``U`` its
-    expanded uncertainty (k = 2) and ``decision`` the ISO 14253-1 decision, when the
-    results carry them."""
+    """One checked quantity of a feature (mm, or as the characteristic says); the values
+    are None for a toleranced characteristic that was not evaluated; ``U`` its expanded
+    uncertainty (k = 2) and ``decision`` the ISO 14253-1 decision, when the results carry
+    them."""
 
     name: str
-    measured: float
-    nominal: float
-    deviation: float
+    measured: float | None
+    nominal: float | None
+    deviation: float | None
     lower: float | None
     upper: float | None
     ok: bool | None
+    status: str = "-"
     U: float | None = None
     decision: str | None = None
 
@@ -57,11 +60,14 @@ class Feature:
     Attributes:
         id: feature id from the spec.
         kind: feature kind (``sphere_test`` ...).
-        ok: all toleranced characteristics within limits; None if none is toleranced.
+        ok: all toleranced characteristics within limits; None if none is toleranced or
+            the feature was not evaluated.
         characteristics: the checked quantities, in results order.
         points: (n) compensated contact points, mm.
         directions: (n) nominal unit normals of the points.
         residuals: (n) signed radial residuals of the fit, mm (+ = outside).
+        status: ``OK``, ``NOT OK``, ``NOT EVALUATED`` or ``-``.
+        reason: why it was not evaluated.
     """
 
     id: str
@@ -71,6 +77,8 @@ class Feature:
     points: tuple[Vec3, ...]
     directions: tuple[Vec3, ...]
     residuals: tuple[float, ...]
+    status: str = "-"
+    reason: str = ""
 
     def char(self, name: str) -> Characteristic | None:
         """The characteristic called ``name``, or None."""
@@ -80,14 +88,14 @@ class Feature:
     def nominal_centre(self) -> Vec3:
         """Nominal centre from the X, Y, Z characteristics (origin if absent)."""
         xyz = [self.char(axis) for axis in "XYZ"]
-        x, y, z = (0.0 if c is None else c.nominal for c in xyz)
+        x, y, z = (0.0 if c is None or c.nominal is None else c.nominal for c in xyz)
         return (x, y, z)
 
     @property
     def nominal_radius(self) -> float | None:
         """Half the nominal (calibrated) diameter ``D``, or None."""
         d = self.char("D")
-        return None if d is None else d.nominal / 2.0
+        return None if d is None or d.nominal is None else d.nominal / 2.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -169,6 +177,7 @@ class Results:
     probe: ProbeRadii | None
     functions: tuple[Function, ...]
     decisions: tuple[Decision, ...] = ()
+    status: str = "-"
     decision_rule: str = ""
     uncertainty_notes: tuple[str, ...] = ()
 
@@ -187,14 +196,16 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
     root = r.mapping(doc, "")
     cal = r.mapping(root.get("calibration", {}), "calibration")
     unc = r.mapping(root.get("uncertainty", {}), "uncertainty")
+    features = tuple(_feature(r, f, f"features[{i}]")
+                     for i, f in enumerate(r.items(root.get("features"), "features")))
+    complete = r.flag(root.get("complete"), "complete")
     return Results(
         source=r.text(root.get("source", ""), "source"),
         program="" if root.get("program") is None else str(root["program"]),
-        complete=r.flag(root.get("complete"), "complete"),
+        complete=complete,
         notes=tuple(r.texts(root.get("notes", []), "notes")),
         diagnostics=tuple(r.texts(root.get("diagnostics", []), "diagnostics")),
-        features=tuple(_feature(r, f, f"features[{i}]")
-                       for i, f in enumerate(r.items(root.get("features"), "features"))),
+        features=features,
         path=tuple(_segment(r, s, f"path[{i}]")
                    for i, s in enumerate(r.items(root.get("path", []), "path"))),
         probe=None if "probe" not in cal else _probe(r, cal["probe"], "calibration.probe"),
@@ -204,9 +215,20 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         decisions=tuple(_decision(r, d, f"decisions[{i}]")
                         for i, d in enumerate(r.items(root.get("decisions", []),
                                                       "decisions"))),
+        status=r.status(root.get("status"), "status", _run_status(features, complete)),
         decision_rule=r.text(unc.get("decision_rule", ""), "uncertainty.decision_rule"),
         uncertainty_notes=tuple(r.texts(unc.get("notes", []), "uncertainty.notes")),
     )
+
+
+def _run_status(features: Sequence[Feature], complete: bool | None) -> str:
+    """The run's status for results without one (``probegen.evaluate.run_status``)."""
+    statuses = {f.status for f in features}
+    if NOT_OK in statuses:
+        return NOT_OK
+    if NOT_EVALUATED in statuses or complete is False:
+        return NOT_EVALUATED
+    return OK if OK in statuses else UNTOLERANCED
 
 
 def _feature(r: _Reader, value: object, key: str) -> Feature:
@@ -220,9 +242,11 @@ def _feature(r: _Reader, value: object, key: str) -> Feature:
         if seq and len(seq) != len(points):
             r.fail(f"{key}.{name}", f"{len(points)} entries (one per point)",
                    f"{len(seq)}")
+    ok = r.flag(f.get("ok"), f"{key}.ok")
     return Feature(
         id=r.text(f.get("id"), f"{key}.id"), kind=r.text(f.get("kind", ""), f"{key}.kind"),
-        ok=r.flag(f.get("ok"), f"{key}.ok"),
+        ok=ok, status=r.status(f.get("status"), f"{key}.status", status_of(ok)),
+        reason=r.text(f.get("reason", ""), f"{key}.reason"),
         characteristics=tuple(_characteristic(r, c, f"{key}.characteristics[{i}]")
                               for i, c in enumerate(r.items(f.get("characteristics", []),
                                                             f"{key}.characteristics"))),
@@ -231,14 +255,18 @@ def _feature(r: _Reader, value: object, key: str) -> Feature:
 
 def _characteristic(r: _Reader, value: object, key: str) -> Characteristic:
     c = r.mapping(value, key)
+    ok = r.flag(c.get("ok"), f"{key}.ok")
+    status = r.status(c.get("status"), f"{key}.status", status_of(ok))
+    # only a characteristic NOT EVALUATED may lack its values
+    number = r.optional_number if status == NOT_EVALUATED else r.number
     return Characteristic(
         name=r.text(c.get("name"), f"{key}.name"),
-        measured=r.number(c.get("measured"), f"{key}.measured"),
-        nominal=r.number(c.get("nominal"), f"{key}.nominal"),
-        deviation=r.number(c.get("deviation"), f"{key}.deviation"),
+        measured=number(c.get("measured"), f"{key}.measured"),
+        nominal=number(c.get("nominal"), f"{key}.nominal"),
+        deviation=number(c.get("deviation"), f"{key}.deviation"),
         lower=r.optional_number(c.get("lower"), f"{key}.lower"),
         upper=r.optional_number(c.get("upper"), f"{key}.upper"),
-        ok=r.flag(c.get("ok"), f"{key}.ok"),
+        ok=ok, status=status,
         U=r.optional_number(c.get("U"), f"{key}.U"),
         decision=None if c.get("decision") is None
         else r.text(c.get("decision"), f"{key}.decision"))
@@ -296,7 +324,8 @@ def sphere_test_radii(feature: Feature) -> ProbeRadii | None:
     """
     r_eff = feature.char("R_EFF")
     if feature.kind != "sphere_test" or r_eff is None or not feature.residuals \
-            or not feature.directions:
+            or not feature.directions or feature.status == NOT_EVALUATED \
+            or r_eff.nominal is None or r_eff.measured is None:
         return None
     return ProbeRadii(label=f"sphere test {feature.id} (r_i = R_EFF + \u03b5_i)",
                       ball_radius=r_eff.nominal, directions=feature.directions,
@@ -347,6 +376,14 @@ class _Reader:
 
     def texts(self, value: object, key: str) -> list[str]:
         return [self.text(v, f"{key}[{i}]") for i, v in enumerate(self.items(value, key))]
+
+    def status(self, value: object, key: str, default: str) -> str:
+        """A status string (``default`` when absent)."""
+        if value is None:
+            return default
+        if value not in STATUSES:
+            self.fail(key, "one of " + ", ".join(repr(s) for s in STATUSES), _short(value))
+        return str(value)
 
     def flag(self, value: object, key: str) -> bool | None:
         if value is not None and not isinstance(value, bool):
