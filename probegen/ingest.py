@@ -5,9 +5,14 @@ measuring touch to its planned point by feature id and point index, compensates 
 centres along the planned normals, fits and evaluates each feature, and writes
 ``results.json`` and ``results.csv``.
 
-Matching: the spec is planned again (points and order only, no program), so touch ``k``
-of feature ``F`` is the plan's ``k``-th point of ``F``; a resumed program's repeated
-touches count once, the last one read.
+Matching: the spec is planned again (its program without the collision check), so
+touch ``k`` of feature ``F`` is the plan's ``k``-th point of ``F``.  Before matching, the
+log is checked against that plan (:mod:`probegen.logcheck`): the run used (the last
+complete one unless ``run`` says otherwise), the program number and identity its
+``PGSTART`` prints, unknown and duplicate point ids, and touches that cannot be their
+planned move (treated as missing).  A resumed program (a run cut short, then a new
+``PGSTART``) re-prints some points: the runs are read together and a repeated point counts
+once, the last one read; the same point twice within one run is refused.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ from probegen.evaluate_revolved import (
 )
 from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
+from probegen.logcheck import check_log, ranges
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
@@ -70,6 +76,9 @@ class Ingested:
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
         freeform: one evaluated result per free-form feature with touches.
+        incomplete: ids of the features a note says lack touches or were not evaluated
+            (missing, cut short, or removed as implausible); a calibration is never
+            written from such a sphere test.
     """
 
     source: str
@@ -80,26 +89,42 @@ class Ingested:
     revolved: tuple[RevolvedResult, ...] = ()
     decisions: tuple[Decision, ...] = ()
     freeform: tuple[FreeformResult, ...] = ()
+    incomplete: tuple[str, ...] = ()
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
-           calibration: ProbeCalibration | None = None, with_path: bool = False) -> Ingested:
+           calibration: ProbeCalibration | None = None, with_path: bool = False,
+           run: int | None = None, ignore_identity: bool = False) -> Ingested:
     """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for.
 
-    ``with_path`` also plans the whole program again (with its collision check) to
-    record the nominal stylus path for the report.
+    ``with_path`` also runs the collision check of the whole program again to record the
+    nominal stylus path for the report.  ``run`` (1-based) and ``ignore_identity``: see
+    :func:`probegen.logcheck.check_log`.
+
+    Raises:
+        ProbegenError: the log cannot be read, belongs to another program, names points
+            the plan does not have, or has no usable touch.
     """
+    from probegen.planning import plan_program
+    from probegen.planning.identity import planned_touches
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
-    log = read_dprnt(log_path)
-    notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
-             for e in log.errors]
+    planned = plan_program(spec, runtime_variables=True, check=with_path)
+    checked = check_log(read_dprnt(log_path), program=spec.program_number,
+                        identity=planned.program.setup.identity,
+                        touches=planned_touches(planned.program, planned.sphere_tests),
+                        run=run, ignore_identity=ignore_identity)
+    log = checked.log
+    notes = list(checked.notes)
+    notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
+              for e in log.errors]
     if not log.complete:
         notes.append("the log has no PGEND line: the program did not finish")
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
     results = []
     revolved: list[RevolvedResult] = []
     freeform: list[FreeformResult] = []
+    n_notes = len(notes)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             found_r = _revolved(feature, spec, touches, notes)
@@ -118,7 +143,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
         found = [k for k in range(1, len(plan.directions) + 1) if (feature.id, k) in touches]
         missing = sorted(set(range(1, len(plan.directions) + 1)) - set(found))
         if missing:
-            notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+            notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
         if len(found) < MIN_POINTS:
             notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "
                          f"(at least {MIN_POINTS} needed)")
@@ -136,14 +161,11 @@ def ingest(log_path: str | Path, spec: Spec, *,
     if not results and not revolved and not freeform:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
                             f"spec's features, found none usable; " + "; ".join(notes))
-    path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
-    if with_path:
-        from probegen.planning import plan_program
-
-        segments = plan_program(spec, runtime_variables=True).clearance.segments
-        path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
+    path = tuple((s.feature, s.kind, s.start, s.end) for s in planned.clearance.segments)
+    incomplete = tuple(f.id for f in spec.features
+                       if any(n.startswith(f"feature {f.id}: ") for n in notes[n_notes:]))
     return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
-                    decisions(spec, log), tuple(freeform))
+                    decisions(spec, log), tuple(freeform), incomplete)
 
 
 def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
@@ -161,7 +183,7 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
                if t.role == 0]
     full, missing = complete_guides(feature.id, feature.method, nominal, touches)
     if missing:
-        notes.append(f"feature {feature.id}: guide points {_ranges(missing)} lack touches, "
+        notes.append(f"feature {feature.id}: guide points {ranges(missing)} lack touches, "
                      "not evaluated")
     if not full:
         notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
@@ -232,7 +254,7 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], 
     found = [k for k in indices if (feature.id, k) in touches]
     missing = sorted(set(indices) - set(found))
     if missing:
-        notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+        notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
     least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
     which = [plan.section_of_touch[k] for k in found]
     if len(found) < least or len(set(which)) < sections:
@@ -263,16 +285,6 @@ def nominal_of(plan: Any) -> Nominal:
         return Nominal(kind, d.centre, axis, d.minor_diameter, inside, sections,
                        major_diameter=d.major_diameter)
     return Nominal(kind, d.centre, axis, d.diameter, inside, sections)
-
-
-def _ranges(numbers: list[int]) -> str:
-    out: list[str] = []
-    for n in numbers:
-        if out and out[-1].split("-")[-1] == str(n - 1):
-            out[-1] = out[-1].split("-")[0] + f"-{n}"
-        else:
-            out.append(str(n))
-    return ", ".join(out)
 
 
 def _f(x: float) -> float:

@@ -40,6 +40,7 @@ from probegen.results.dprnt_records import (
     DprntLog,
     ProgramError,
     Result,
+    Run,
     Touch,
     _Builder,
 )
@@ -54,6 +55,7 @@ __all__ = [
     "DprntLog",
     "ProgramError",
     "Result",
+    "Run",
     "Touch",
     "decode_dprnt",
     "parse_dprnt",
