@@ -61,7 +61,7 @@ class CheckedLog:
 
 def check_log(log: DprntLog, *, program: int, identity: str,
               touches: Sequence[PlannedTouch], run: int | None = None,
-              ignore_identity: bool = False) -> CheckedLog:
+              ignore_identity: bool = False, plausibility: bool = True) -> CheckedLog:
     """Apply the checks of the module docstring, in order.
 
     Args:
@@ -71,6 +71,8 @@ def check_log(log: DprntLog, *, program: int, identity: str,
         touches: the planned probing moves (:func:`~probegen.planning.identity.planned_touches`).
         run: 1-based run to use (None: the last complete one).
         ignore_identity: accept a log of another program number or identity (a note).
+        plausibility: check the touches against their planned moves (``post-ingest``
+            checks them itself, on its stricter probing-line rule).
 
     Raises:
         ProbegenError: ``run`` out of range, another program, an unknown or duplicate
@@ -79,7 +81,8 @@ def check_log(log: DprntLog, *, program: int, identity: str,
     chosen, notes = select_runs(log, run)
     notes += _identity_notes(log.source, chosen.runs, program, identity, ignore_identity)
     check_point_ids(chosen, touches)
-    kept, rejected, diags = plausible(chosen, touches)
+    kept, rejected, diags = (plausible(chosen, touches) if plausibility
+                             else (chosen.touches, (), ()))
     out = dataclasses.replace(chosen, touches=kept,
                               diagnostics=tuple(sorted((*chosen.diagnostics, *diags),
                                                        key=lambda d: d.line)))

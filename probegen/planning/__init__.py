@@ -153,7 +153,7 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         body += [n for f in freeform for n in f.nodes]
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
-    program = ir.Program(replace(setup, identity=program_identity(spec, program)), program.body)
+    program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
     report = (check_program(program, obstacle, plans, machine, progress=progress) if check
               else ClearanceReport(()))
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,

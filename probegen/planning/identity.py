@@ -4,25 +4,22 @@ A program prints its identity on its first log line (``docs/results.md``, "Log i
 
     PGSTART O1001 V1 H3F09A2C1
 
-``H`` and 8 upper-case hex digits are the first 32 bits of the SHA-256 of a canonical
-text made of
+``H`` and 8 upper-case hex digits are the first 32 bits of the SHA-256 of the program's
+canonical content: the IR program (:mod:`probegen.ir`) as planned for a controller that
+computes at run time, every node written out field by field, lengths and other numbers
+rounded to 4 decimals as programs print them, comments left out.  So the identity covers
+everything the program does and prints: the setup (number, units, stylus, feeds, work
+offset), every move and touch of the plan, and the limits of its in-process decisions.
 
-* the spec's content: the spec file parsed as TOML and written back as JSON with sorted
-  keys (comments, blank lines, key order and line endings do not count; every value does,
-  tolerances included, since the in-process decisions the program prints depend on
-  them); a spec built in code without a readable file counts by the ``repr`` of its
-  program number, name and features;
-* the planned touches: for each probing move of the program in order, its kind (``PT`` or
-  ``LOC``), feature id, index, the nominal ball centre where the search starts and where
-  it ends (work coordinates, mm, 4 decimals as a program prints them).
-
-Why this and not the emitted program text: the touches are exactly what ``ingest``
-matches a log against, and the same spec gives the same touches for every dialect that
-prints a DPRNT log (Fanuc, Haas, LinuxCNC), so a log is accepted whichever of them ran it,
-and a new probegen release that only words a comment differently does not orphan old
-logs; a changed spec value, model, profile (feeds aside) or plan changes the identity.
-The text is rounded as programs are, so it is repeatable across machines like the
-golden programs are.
+Why the IR and not the emitted text or the spec file: ``ingest`` plans the spec again and
+gets the same IR without emitting a program, for every dialect that prints a DPRNT log
+(Fanuc, Haas, LinuxCNC: a log is accepted whichever of them ran it); a new release that
+only words a comment differently does not orphan old logs; and a spec change the program
+does not see (a tolerance evaluated offline, a comment, a moved file) leaves the identity
+alone, so a log can be evaluated again against a revised tolerance.  Any change to what
+the machine does (a feature, the model, the profile's stylus or feeds, an action's
+limits) changes it.  Rounded as programs are, it is repeatable across machines like the
+golden programs.
 
 :func:`planned_touches` evaluates the program nominally (run-time variables at their
 nominal values, as :mod:`probegen.planning.collision` does) to give each touch's search
@@ -31,12 +28,11 @@ segment and how far the run-time location may move it (:attr:`PlannedTouch.uncer
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
-import json
 from collections.abc import Sequence
-from dataclasses import dataclass
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from enum import Enum
+from typing import Any, Literal
 
 import numpy as np
 
@@ -44,16 +40,13 @@ from probegen import ir
 from probegen.planning.collision import _Walker
 from probegen.results.dprnt_records import IDENTITY_DIGITS
 
-if TYPE_CHECKING:
-    from probegen.spec import Spec
-
 Vec3 = tuple[float, float, float]
 
 IDENTITY_PREFIX = "H"
 """The letter before the hex digits of the identity token (``H3F09A2C1``)."""
 
 
-@dataclass(frozen=True, slots=True)
+@dataclasses.dataclass(frozen=True, slots=True)
 class PlannedTouch:
     """One probing move as planned, in the terms a DPRNT record names it.
 
@@ -127,27 +120,42 @@ def _mm(v: float) -> str:
     return f"{round(v, 4) + 0.0:.4f}"
 
 
-def spec_content(spec: Spec) -> str:
-    """The spec's canonical content (see the module docstring)."""
-    import tomllib
+def canonical(value: Any) -> str:
+    """A repeatable text of an IR value (see the module docstring): dataclasses field by
+    field, floats to 4 decimals, enums by value, ``Comment`` nodes and the setup's
+    ``identity`` left out."""
+    if isinstance(value, ir.Comment):
+        return ""
+    if isinstance(value, bool | int | str) or value is None:
+        return repr(value)
+    if isinstance(value, float):
+        return _mm(value)
+    if isinstance(value, Enum):
+        return repr(value.value)
+    if isinstance(value, tuple | list):
+        return "[" + ",".join(canonical(v) for v in value) + "]"
+    if dataclasses.is_dataclass(value):
+        fields = [f"{f.name}={canonical(getattr(value, f.name))}"
+                  for f in dataclasses.fields(value)
+                  if not (isinstance(value, ir.Setup) and f.name == "identity")]
+        return f"{type(value).__name__}({','.join(fields)})"
+    return repr(value)
 
-    try:
-        data = Path(spec.source).read_bytes()
-        doc = tomllib.loads(data.decode("utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return repr((spec.program_number, spec.program_name, spec.features))
-    return json.dumps(doc, sort_keys=True, default=str, ensure_ascii=True)
 
-
-def identity_of(content: str, touches: Sequence[PlannedTouch]) -> str:
-    """The identity token (``H`` + 8 upper-case hex digits) of ``content`` and ``touches``."""
-    lines = [content] + [
-        f"{t.kind} {t.feature} {t.index} " + " ".join(_mm(v) for v in (*t.start, *t.end))
-        for t in touches]
-    digest = hashlib.sha256("\n".join(lines).encode("utf-8")).hexdigest()
+def identity_of(content: str) -> str:
+    """The identity token (``H`` + 8 upper-case hex digits) of a canonical text."""
+    digest = hashlib.sha256(content.encode("utf-8")).hexdigest()
     return IDENTITY_PREFIX + digest[:IDENTITY_DIGITS].upper()
 
 
-def program_identity(spec: Spec, program: ir.Program) -> str:
-    """The identity of the program planned from ``spec``."""
-    return identity_of(spec_content(spec), planned_touches(program))
+def map_identity(text: str, touches: Sequence[Any]) -> str:
+    """The identity of a posted program (``probegen post``): the DMIS program as posted
+    and its touches (``post.featuremap.PostTouch``: id, index, start, direction, reach)."""
+    lines = [text] + [f"PT {t.id} {t.index} {canonical((t.start, t.direction, t.reach))}"
+                      for t in touches]
+    return identity_of("\n".join(lines))
+
+
+def program_identity(program: ir.Program) -> str:
+    """The identity of ``program`` (see the module docstring)."""
+    return identity_of(canonical(program))
