@@ -109,7 +109,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
     from probegen.planning.identity import planned_touches
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
-    planned = plan_program(spec, runtime_variables=True, check=with_path)
+    planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
     checked = check_log(read_dprnt(log_path), program=spec.program_number,
                         identity=planned.program.setup.identity,
                         touches=planned_touches(planned.program, planned.sphere_tests),

@@ -34,7 +34,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from probegen.errors import Diagnostic, ProbegenError, ResultsParseError
-from probegen.planning.identity import PlannedTouch
+from probegen.identity import PlannedTouch
 from probegen.results.dprnt import DprntLog, Run, Touch
 
 PLAUSIBLE_MARGIN = 0.5
@@ -183,10 +183,10 @@ def check_point_ids(log: DprntLog, touches: Sequence[PlannedTouch]) -> None:
     Raises:
         ResultsParseError: naming the log's file and line.
     """
-    planned = {(t.kind, t.feature, t.index) for t in touches}
+    planned = {(p.kind, p.feature, p.index) for p in touches}
     features: dict[tuple[str, str], list[int]] = {}
-    for t in touches:
-        features.setdefault((t.kind, t.feature), []).append(t.index)
+    for p in touches:
+        features.setdefault((p.kind, p.feature), []).append(p.index)
     seen: dict[tuple[int, str, str, int], int] = {}
     for t in log.touches:
         where = f"{log.source}:{t.line}: {t.kind} {t.feature} {t.index}"
@@ -212,7 +212,7 @@ def plausible(log: DprntLog, touches: Sequence[PlannedTouch]) -> tuple[
         tuple[Touch, ...], tuple[Touch, ...], tuple[Diagnostic, ...]]:
     """Split the log's touches into those that can be their planned touch and those that
     cannot; one diagnostic per rejected touch."""
-    planned = {(t.kind, t.feature, t.index): t for t in touches}
+    planned = {(p.kind, p.feature, p.index): p for p in touches}
     kept: list[Touch] = []
     rejected: list[Touch] = []
     diags: list[Diagnostic] = []

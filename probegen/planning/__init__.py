@@ -81,7 +81,7 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
 
 def plan_program(spec: Spec, *, runtime_variables: bool,
                  progress: Callable[[int], None] | None = None,
-                 check: bool = True) -> PlannedProgram:
+                 check_collisions: bool = True) -> PlannedProgram:
     """Plan every feature of ``spec`` and check the whole path for collisions.
 
     Args:
@@ -89,7 +89,7 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         runtime_variables: whether the target controller computes at run time (Macro B
             yes, DMIS no); decides how a sphere of uncertain position is located.
         progress: called with 1 for every feature planned and every node checked.
-        check: run the collision check of the whole path (``False``: ``clearance`` is
+        check_collisions: run the collision check of the whole path (``False``: ``clearance`` is
             empty; ``ingest`` needs the planned touches only, the features' own
             planning still checks what it checks).
 
@@ -154,8 +154,8 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
     program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
-    report = (check_program(program, obstacle, plans, machine, progress=progress) if check
-              else ClearanceReport(()))
+    report = (check_program(program, obstacle, plans, machine, progress=progress)
+              if check_collisions else ClearanceReport(()))
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,
                           tuple(freeform))
 

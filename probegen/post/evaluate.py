@@ -26,8 +26,8 @@ from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
 from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
 from probegen.errors import ResultsParseError
+from probegen.identity import PlannedTouch, map_identity
 from probegen.logcheck import check_log
-from probegen.planning.identity import PlannedTouch, map_identity
 from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
 from probegen.results.dprnt import DprntLog, read_dprnt
 

@@ -15,9 +15,9 @@ from probegen import ir
 from probegen.dialects import get_dialect
 from probegen.dmis import read_dmis
 from probegen.errors import UnsupportedError
+from probegen.identity import map_identity
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import MeshObstacle, load_model
-from probegen.planning.identity import map_identity
 from probegen.post.featuremap import FeatureMap, dumps, feature_map
 from probegen.post.frontend import PostedProgram, post_dmis
 
