@@ -71,12 +71,20 @@ class PlannedTouch:
     end: Vec3
     uncertainty: float
 
-    def distance(self, xyz: Vec3) -> float:
-        """Distance (mm) of ball centre ``xyz`` from the planned search segment."""
+    def offset(self, xyz: Vec3) -> np.ndarray:
+        """Ball centre ``xyz`` less the nearest point of the planned search segment, mm."""
         a, b, p = np.array(self.start), np.array(self.end), np.array(xyz)
         ab = b - a
         t = float(np.clip((p - a) @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0))
-        return float(np.linalg.norm(p - (a + t * ab)))
+        return p - (a + t * ab)
+
+    def distance(self, xyz: Vec3) -> float:
+        """Distance (mm) of ball centre ``xyz`` from the planned search segment."""
+        return float(np.linalg.norm(self.offset(xyz)))
+
+    def worst_axis(self, xyz: Vec3) -> int:
+        """The axis (0, 1, 2) along which ``xyz`` is farthest from the search segment."""
+        return int(np.argmax(np.abs(self.offset(xyz))))
 
 
 def vec3_of(a: np.ndarray) -> Vec3:

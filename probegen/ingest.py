@@ -48,6 +48,7 @@ from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
 from probegen.logcheck import check_log, ranges
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
+from probegen.results.dprnt import log_lines
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec
 from probegen.spec_actions import PlanarSpec
 
@@ -110,10 +111,12 @@ def ingest(log_path: str | Path, spec: Spec, *,
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
     planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
-    checked = check_log(read_dprnt(log_path), program=spec.program_number,
+    raw = read_dprnt(log_path)
+    checked = check_log(raw, program=spec.program_number,
                         identity=planned.program.setup.identity,
                         touches=planned_touches(planned.program, planned.sphere_tests),
-                        run=run, ignore_identity=ignore_identity)
+                        run=run, ignore_identity=ignore_identity,
+                        lines=log_lines(Path(log_path).read_bytes()))
     log = checked.log
     notes = list(checked.notes)
     notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"

@@ -30,6 +30,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -61,7 +62,8 @@ class CheckedLog:
 
 def check_log(log: DprntLog, *, program: int, identity: str,
               touches: Sequence[PlannedTouch], run: int | None = None,
-              ignore_identity: bool = False, plausibility: bool = True) -> CheckedLog:
+              ignore_identity: bool = False, plausibility: bool = True,
+              lines: Sequence[str] = ()) -> CheckedLog:
     """Apply the checks of the module docstring, in order.
 
     Args:
@@ -73,6 +75,8 @@ def check_log(log: DprntLog, *, program: int, identity: str,
         ignore_identity: accept a log of another program number or identity (a note).
         plausibility: check the touches against their planned moves (``post-ingest``
             checks them itself, on its stricter probing-line rule).
+        lines: the log's lines (:func:`~probegen.results.dprnt.log_lines`), to quote an
+            implausible touch and point at its worst coordinate.
 
     Raises:
         ProbegenError: ``run`` out of range, another program, an unknown or duplicate
@@ -81,7 +85,7 @@ def check_log(log: DprntLog, *, program: int, identity: str,
     chosen, notes = select_runs(log, run)
     notes += _identity_notes(log.source, chosen.runs, program, identity, ignore_identity)
     check_point_ids(chosen, touches)
-    kept, rejected, diags = (plausible(chosen, touches) if plausibility
+    kept, rejected, diags = (plausible(chosen, touches, lines) if plausibility
                              else (chosen.touches, (), ()))
     out = dataclasses.replace(chosen, touches=kept,
                               diagnostics=tuple(sorted((*chosen.diagnostics, *diags),
@@ -208,10 +212,11 @@ def check_point_ids(log: DprntLog, touches: Sequence[PlannedTouch]) -> None:
         seen[key] = t.line
 
 
-def plausible(log: DprntLog, touches: Sequence[PlannedTouch]) -> tuple[
-        tuple[Touch, ...], tuple[Touch, ...], tuple[Diagnostic, ...]]:
+def plausible(log: DprntLog, touches: Sequence[PlannedTouch], lines: Sequence[str] = ()
+              ) -> tuple[tuple[Touch, ...], tuple[Touch, ...], tuple[Diagnostic, ...]]:
     """Split the log's touches into those that can be their planned touch and those that
-    cannot; one diagnostic per rejected touch."""
+    cannot; one diagnostic per rejected touch (with ``lines``: quoting its line, the
+    column at the coordinate farthest off)."""
     planned = {(p.kind, p.feature, p.index): p for p in touches}
     kept: list[Touch] = []
     rejected: list[Touch] = []
@@ -225,11 +230,26 @@ def plausible(log: DprntLog, touches: Sequence[PlannedTouch]) -> tuple[
             continue
         rejected.append(t)
         xyz = " ".join(f"{a}{v:.4f}" for a, v in zip("XYZ", t.xyz, strict=True))
-        diags.append(Diagnostic(log.source, t.line, 0, (
+        text = lines[t.line - 1] if 0 < t.line <= len(lines) else ""
+        column = _axis_column(text, "XYZ"[plan.worst_axis(t.xyz)]) if plan else 0
+        diags.append(Diagnostic(log.source, t.line, column, (
             f"{t.kind} {t.feature} {t.index} at {xyz} is {d:.4f} mm from its planned "
             f"search move (at most {limit:.4f} mm expected): a corrupt value, it cannot be "
-            "that touch; treated as missing")))
+            "that touch; treated as missing"), text if column else ""))
     return tuple(kept), tuple(rejected), tuple(diags)
+
+
+_AXIS_AFTER_ID = re.compile(r"[ \t%]*(?:PT|LOC)[ \t]+\S+[ \t]+\S+[ \t]+", re.IGNORECASE)
+"""The record word, feature id and index of a touch line: the axes follow."""
+
+
+def _axis_column(text: str, axis: str) -> int:
+    """1-based column of ``axis`` among the coordinates of touch line ``text`` (0: none)."""
+    head = _AXIS_AFTER_ID.match(text)
+    if head is None:
+        return 0
+    k = text.upper().find(axis, head.end())
+    return k + 1 if k >= 0 else 0
 
 
 def ranges(numbers: list[int]) -> str:

@@ -211,7 +211,8 @@ def test_a_value_that_cannot_be_the_touch_writes_no_calibration(tmp_path: Path) 
     log.write_text(text)
     result = ingest(log, _spec())
     (diag,) = result.log.diagnostics
-    assert diag.line == line and "cannot be that touch" in diag.message
+    assert (diag.line, diag.column) == (line, 11) and "cannot be that touch" in diag.message
+    assert str(diag).endswith("    PT SPH1 7 X-50008.1488 Y-10.1488 Z9.2984\n              ^")
     assert result.results[0].effective_radius == pytest.approx(3.0, abs=0.01)
     cal = tmp_path / "cal.toml"
     code = main(["ingest", str(log), "--spec", str(SPEC), "-o", str(tmp_path / "out"),
