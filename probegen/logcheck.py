@@ -174,10 +174,13 @@ def _identity_notes(source: str, runs: Sequence[Run], program: int, identity: st
         notes.append(f"WARNING: identity not checked (--ignore-identity): the log's "
                      f"PGSTART at line {r.start} prints {found}, the spec's program is "
                      f"{expected}; these results may not belong to this spec")
-    if any(r.identity is None for r in runs):
+    if any(r.identity is None and r.start for r in runs):
         notes.append("log carries no program identity (a PGSTART without the H token, "
                      "from a program compiled before identities): it was not checked "
                      "against the spec")
+    elif not any(r.start for r in runs):
+        notes.append("log carries no program identity (no PGSTART line: was the capture "
+                     "started late?): it was not checked against the spec")
     return notes
 
 

@@ -303,3 +303,12 @@ def test_ingest_of_a_changed_coordinate_never_crashes(tmp_path_factory: pytest.T
     r = result.results[0]
     assert r.effective_radius == pytest.approx(3.0, abs=0.5)  # never a 50 m calibration
     assert dataclasses.is_dataclass(result)
+
+
+def test_a_log_without_pgstart_is_noted() -> None:
+    identity, touches = _planned()
+    log = parse_dprnt(BODY + "PGEND O1001\n", source="late.log")
+    checked = check_log(log, program=1001, identity=identity, touches=touches)
+    assert checked.notes[-1].startswith("log carries no program identity (no PGSTART line")
+    assert log.diagnostics[0].message.startswith("expected the PGSTART header")
+    assert len(checked.log.touches) == len(log.touches)
