@@ -21,7 +21,7 @@ from probegen import __version__
 from probegen.cli_exit import ExitCode
 from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _target
 from probegen.cli_probe import add_probe_options, probe_from_args
-from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report
+from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report, add_log_options
 from probegen.errors import ProbegenError
 from probegen.uncertainty import DECISION_RULES
 
@@ -134,9 +134,12 @@ def _post_ingest(args: argparse.Namespace) -> int:
     from probegen.cli_results import verdict_code
     from probegen.post.evaluate import ingest_file, results_table, run_status
 
-    log, result = ingest_file(args.log, args.features)
+    log, result, notes = ingest_file(args.log, args.features, run=args.run,
+                                     ignore_identity=args.ignore_identity)
     Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
     sys.stdout.write(results_table(result))
+    for note in notes:
+        print(f"note: {note}")
     status = run_status(log, result)
     print(f"status: {status}{'' if log.complete else ' (the run did not finish)'}")
     print(f"wrote {args.output}")
@@ -195,6 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--decision-rule", choices=DECISION_RULES,
                    help="ISO 14253-1 decision rule: simple acceptance or guard_band by U "
                         "(default: the spec's [evaluation] decision_rule, else simple)")
+    add_log_options(i)
     i.set_defaults(func=_ingest)
 
     cp = sub.add_parser("capture", help="record what the machine sends on a serial port")
@@ -244,6 +248,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--validate", action="store_true", help="validate against the schema")
     q.add_argument("--schema", help="QIFDocument.xsd (default: $PROBEGEN_QIF_SCHEMA)")
     q.add_argument("-o", "--output", default="results.qif", help="the QIF file")
+    add_log_options(q)
     q.set_defaults(func=_qif)
 
     rp = sub.add_parser("report", help="one self-contained HTML report from results.json")
@@ -293,6 +298,7 @@ def _post_parsers(sub: Any) -> None:
                     help="the feature map written by probegen post")
     pi.add_argument("-o", "--output", default="results.dmo",
                     help="the DMIS output file (default results.dmo)")
+    add_log_options(pi)
     pi.set_defaults(func=_post_ingest)
 
 

@@ -6,13 +6,28 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from probegen.cli_exit import ExitCode
 from probegen.errors import ProbegenError
 
+if TYPE_CHECKING:
+    from probegen.ingest import Ingested
+
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
 """``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
 CMM's and a CMM's results), any other as a DPRNT log."""
+
+
+def add_log_options(p: argparse.ArgumentParser) -> None:
+    """``--run`` and ``--ignore-identity``: which run of a DPRNT log, and whether its
+    program identity is checked (``docs/results.md``, "Log identity")."""
+    p.add_argument("--run", type=int, metavar="N",
+                   help="use run N of a log holding several (1-based, in log order; "
+                        "default: the last complete run)")
+    p.add_argument("--ignore-identity", action="store_true",
+                   help="read a log whose program number or identity differs from the "
+                        "spec's (a warning goes into every output)")
 
 
 def _ingest(args: argparse.Namespace) -> int:
@@ -28,7 +43,8 @@ def _ingest(args: argparse.Namespace) -> int:
         result = ingest_dmis(args.log, spec, decision_rule=args.decision_rule)
     else:
         result = ingest(args.log, spec, calibration=cal, with_path=True,
-                        decision_rule=args.decision_rule)
+                        decision_rule=args.decision_rule, run=args.run,
+                        ignore_identity=args.ignore_identity)
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
     for note in result.notes:
@@ -43,6 +59,7 @@ def _ingest(args: argparse.Namespace) -> int:
             raise ProbegenError("--write-calibration: expected an evaluated sphere test, "
                                 f"found {'none' if not skipped else 'only NOT EVALUATED '}"
                                 f"{', '.join(skipped)}")
+        refuse_incomplete_calibration(result)
         target = Path(args.write_calibration)
         target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
                           encoding="utf-8", newline="\n")
@@ -56,6 +73,25 @@ def verdict_code(status: str) -> ExitCode:
 
     return {NOT_OK: ExitCode.NOT_OK, NOT_EVALUATED: ExitCode.INCOMPLETE}.get(status,
                                                                          ExitCode.OK)
+
+
+def refuse_incomplete_calibration(result: Ingested) -> None:
+    """Refuse to write a calibration from a sphere test that is not whole: a run cut
+    short, a touch missing or removed as implausible, or a log read with its identity
+    ignored.
+
+    Raises:
+        ProbegenError: naming why.
+    """
+    test = result.results[0].feature
+    why = ("the log's run did not finish (no PGEND)" if not result.log.complete else
+           f"the sphere test {test} lacks touches (see the notes)"
+           if test in result.incomplete else
+           "the log's identity was not checked (--ignore-identity)"
+           if any(n.startswith("WARNING: identity") for n in result.notes) else "")
+    if why:
+        raise ProbegenError(f"--write-calibration: expected a complete sphere test of this "
+                            f"program, found that {why}; no calibration written")
 
 
 _PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
@@ -106,9 +142,9 @@ def _qif(args: argparse.Namespace) -> int:
             raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
         spec = load_spec(args.spec)
         cal = load_calibration(args.calibration) if args.calibration else None
-        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal,
-                                             decision_rule=args.decision_rule),
-                                      spec=spec), ()
+        ing = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
+                     run=args.run, ignore_identity=args.ignore_identity)
+        text, notes = ingested_to_qif(ing, spec=spec), ing.notes
     path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
     for note in notes:
         print(f"note: {note}")

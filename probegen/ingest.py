@@ -5,9 +5,14 @@ measuring touch to its planned point by feature id and point index, compensates 
 centres along the planned normals, fits and evaluates each feature, and writes
 ``results.json`` and ``results.csv``.
 
-Matching: the spec is planned again (points and order only, no program), so touch ``k``
-of feature ``F`` is the plan's ``k``-th point of ``F``; a resumed program's repeated
-touches count once, the last one read.
+Matching: the spec is planned again (its program without the collision check), so
+touch ``k`` of feature ``F`` is the plan's ``k``-th point of ``F``.  Before matching, the
+log is checked against that plan (:mod:`probegen.logcheck`): the run used (the last
+complete one unless ``run`` says otherwise), the program number and identity its
+``PGSTART`` prints, unknown and duplicate point ids, and touches that cannot be their
+planned move (treated as missing).  A resumed program (a run cut short, then a new
+``PGSTART``) re-prints some points: the runs are read together and a repeated point counts
+once, the last one read; the same point twice within one run is refused.
 """
 
 from __future__ import annotations
@@ -51,7 +56,9 @@ from probegen.evaluate_revolved import (
 )
 from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
+from probegen.logcheck import check_log, ranges
 from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
+from probegen.results.dprnt import log_lines
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec, SphereTest
 from probegen.spec_actions import PlanarSpec
 from probegen.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
@@ -84,7 +91,8 @@ class Ingested:
         freeform: one evaluated result per free-form feature with all its touches.
         planar: one evaluated result per line and plane with all its touches.
         not_evaluated: every other spec feature: too few or no-contact touches, a
-            failed fit, a run cut short before it (``NOT EVALUATED``).
+            failed fit, a run cut short before it, touches removed as implausible
+            (``NOT EVALUATED``).
         rule: the ISO 14253-1 decision rule of the verdicts (``simple``, ``guard_band``).
         budget: the stated uncertainty contributions the characteristics' ``u`` used.
     """
@@ -113,6 +121,13 @@ class Ingested:
         """The run's status (:func:`probegen.evaluate.run_status`)."""
         return run_status((accepted(r.characteristics, self.rule) for r in self.evaluated),
                           not_evaluated=bool(self.not_evaluated), complete=self.log.complete)
+
+    @property
+    def incomplete(self) -> tuple[str, ...]:
+        """Ids of the features NOT EVALUATED (missing, no-contact or implausible touches,
+        a run cut short, a failed fit): a calibration is never written from such a
+        sphere test."""
+        return tuple(n.feature for n in self.not_evaluated)
 
     @property
     def uncertainty_notes(self) -> tuple[str, ...]:
@@ -169,27 +184,43 @@ class _Gaps:
                for k in blind]
         if missing and missing_too:
             why.append(f"no touch for point{'s' if len(missing) > 1 else ''} "
-                       f"{_ranges(missing)}")
+                       f"{ranges(missing)}")
         return "; ".join(why)
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
            calibration: ProbeCalibration | None = None, with_path: bool = False,
-           decision_rule: str | None = None) -> Ingested:
+           decision_rule: str | None = None, run: int | None = None,
+           ignore_identity: bool = False) -> Ingested:
     """Read a DPRNT log and evaluate every feature of ``spec``: completely, or as
     ``NOT EVALUATED`` with the reason.
 
-    ``with_path`` also plans the whole program again (with its collision check) to
-    record the nominal stylus path for the report.  ``decision_rule`` overrides the
-    spec's ``[evaluation] decision_rule``.
+    The log is first checked against the program (:func:`probegen.logcheck.check_log`:
+    program number and identity, which run, unknown and duplicate point ids, touches
+    too far from their planned move); ``run`` (1-based) and ``ignore_identity`` are
+    passed to it.  ``with_path`` also runs the collision check of the whole program
+    again to record the nominal stylus path for the report.  ``decision_rule``
+    overrides the spec's ``[evaluation] decision_rule``.
 
     Raises:
-        ProbegenError: the log holds no touch of any feature of the spec, and no alarm
-            of one (a run stopped at its first touch is NOT EVALUATED).
+        ProbegenError: the log cannot be read, belongs to another program, names points
+            the plan does not have, or holds no touch of any feature of the spec and no
+            alarm of one (a run stopped at its first touch is NOT EVALUATED).
     """
-    log = read_dprnt(log_path)
-    notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
-             for e in log.errors]
+    from probegen.planning import plan_program
+    from probegen.planning.identity import planned_touches
+
+    planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
+    raw = read_dprnt(log_path)
+    checked = check_log(raw, program=spec.program_number,
+                        identity=planned.program.setup.identity,
+                        touches=planned_touches(planned.program, planned.sphere_tests),
+                        run=run, ignore_identity=ignore_identity,
+                        lines=log_lines(Path(log_path).read_bytes()))
+    log = checked.log
+    notes = list(checked.notes)
+    notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
+              for e in log.errors]
     if not log.complete:
         notes.append("the log has no PGEND line: the program did not finish")
     touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
@@ -212,12 +243,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
         else:
             outcomes.append(_sphere_test(feature, spec, touches, notes, gaps, calibration,
                                          budget))
-    path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
-    if with_path:
-        from probegen.planning import plan_program
-
-        segments = plan_program(spec, runtime_variables=True).clearance.segments
-        path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
+    path = tuple((s.feature, s.kind, s.start, s.end)
+                 for s in planned.clearance.segments) if with_path else ()
     return Ingested(str(log_path), log, _only(outcomes, SphereTestResult), tuple(notes),
                     path, _only(outcomes, RevolvedResult), decisions(spec, log),
                     _only(outcomes, FreeformResult), _only(outcomes, PlanarResult),
@@ -277,7 +304,7 @@ def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[
     found = [k for k in planned if (feature.id, k) in touches]
     missing = sorted(set(planned) - set(found))
     if missing:
-        notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+        notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
     tol = feature.tolerance
     names = _limits(("POS", _upper(tol.position)), ("D", _sym(tol.size)),
                     ("P_FTU", _upper(tol.form)), ("P_STU", _sym(tol.size)))
@@ -338,9 +365,9 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
     reason = "" if gaps is None else gaps.reason(
         feature.id, [t.index for t in plan.touches], missing_too=False)
     if missing:
-        notes.append(f"feature {feature.id}: guide points {_ranges(missing)} lack touches, "
+        notes.append(f"feature {feature.id}: guide points {ranges(missing)} lack touches, "
                      "not evaluated")
-        reason = "; ".join(w for w in (reason, f"guide points {_ranges(missing)} lack "
+        reason = "; ".join(w for w in (reason, f"guide points {ranges(missing)} lack "
                                                "touches") if w)
     if not full:
         notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
@@ -415,7 +442,7 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[s
     found = [k for k in indices if (feature.id, k) in touches]
     missing = sorted(set(indices) - set(found))
     if missing:
-        notes.append(f"feature {feature.id}: no touch for points {_ranges(missing)}")
+        notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
     nominal = nominal_of(plan)
     names = _revolved_names(feature, len(nominal.sections))
     reason = gaps.reason(feature.id, indices)
@@ -465,16 +492,6 @@ def nominal_of(plan: Any) -> Nominal:
         return Nominal(kind, d.centre, axis, d.minor_diameter, inside, sections,
                        major_diameter=d.major_diameter)
     return Nominal(kind, d.centre, axis, d.diameter, inside, sections)
-
-
-def _ranges(numbers: list[int]) -> str:
-    out: list[str] = []
-    for n in numbers:
-        if out and out[-1].split("-")[-1] == str(n - 1):
-            out[-1] = out[-1].split("-")[0] + f"-{n}"
-        else:
-            out.append(str(n))
-    return ", ".join(out)
 
 
 def _f(x: float) -> float:

@@ -78,6 +78,9 @@ class Setup:
         variable_base: first controller variable the program may use.
         reset_codes: modal codes set in the header (see ``MachineProfile``).
         probe_length: stylus length from the ball centre, mm.
+        identity: the program identity printed on the ``PGSTART`` line (``H`` and 8 hex
+            digits, :mod:`probegen.planning.identity`); empty for programs that print none
+            (rotary, grating and posted programs).
     """
 
     program_number: int
@@ -96,6 +99,7 @@ class Setup:
     variable_base: int
     reset_codes: tuple[str, ...]
     probe_length: float
+    identity: str = ""
 
 
 @dataclass(frozen=True, slots=True)

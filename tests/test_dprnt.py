@@ -25,6 +25,7 @@ from probegen.results import (
     parse_dprnt,
     read_dprnt,
 )
+from probegen.results.dprnt import Run
 
 CLEAN = (
     "%\n"
@@ -54,6 +55,7 @@ EXPECTED = DprntLog(
     complete=True,
     restarts=0,
     diagnostics=(),
+    runs=(Run(0, 2, 9, 1001, None),),
 )
 
 
@@ -119,7 +121,8 @@ def _without_lines(log: DprntLog) -> DprntLog:
         return tuple(dataclasses.replace(r, line=0) for r in records)
 
     return dataclasses.replace(
-        log, touches=strip(log.touches), centres=strip(log.centres), errors=strip(log.errors)
+        log, touches=strip(log.touches), centres=strip(log.centres), errors=strip(log.errors),
+        runs=tuple(dataclasses.replace(r, start=0, end=int(r.complete)) for r in log.runs),
     )
 
 

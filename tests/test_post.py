@@ -37,11 +37,12 @@ from probegen.errors import (
     ResultsParseError,
     UnsupportedError,
 )
+from probegen.identity import map_identity
 from probegen.machine.kinematics import Machine, load_machine
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.machine.profile import load_profile
 from probegen.planning.collision import SphereObstacle
-from probegen.post.evaluate import evaluate_log
+from probegen.post.evaluate import evaluate_log, ingest_file
 from probegen.post.featuremap import dumps, feature_map, parse_feature_map, read_feature_map
 from probegen.post.files import PostOutput, post_file
 from probegen.post.frontend import post_dmis
@@ -451,3 +452,25 @@ def test_reroute_lifts_over_the_clearance_plane() -> None:
                      ((30.0, 0.0, 0.0), "protected"), ((30.0, 0.0, 100.0), "protected")]
     assert [s.line for s in out.skipped] == [5, 6, 7]
     assert out.touches == () and out.move_clearance > 0.0
+
+
+def test_post_ingest_checks_the_identity(tmp_path: Path, posted: dict[str, PostOutput],
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    out = posted[SIMPLE.name]
+    identity = map_identity(out.fmap.text, out.fmap.touches)
+    assert f"DPRNT[PGSTART*O1001*V1*{identity}]" in out.text.splitlines()
+    features = tmp_path / "simple.features.json"
+    features.write_text(dumps(out.fmap))
+    log = tmp_path / "run.log"
+    log.write_text(SIMPLE_LOG.replace("V1\n", f"V1 {identity}\n", 1))
+    _, result, notes = ingest_file(log, features)
+    assert notes == () and result.features["A_CIRCLE"].size == pytest.approx(50.0, abs=1e-9)
+    log.write_text(SIMPLE_LOG.replace("V1\n", "V1 H0000BEEF\n", 1))
+    with pytest.raises(ProbegenError, match=f"run.log:1: expected the program of the spec, "
+                                            f"O1001 {identity}, found O1001 H0000BEEF"):
+        ingest_file(log, features)
+    assert main(["post-ingest", str(log), "--features", str(features), "-o",
+                 str(tmp_path / "r.dmo"), "--ignore-identity"]) == ExitCode.OK
+    assert "note: WARNING: identity not checked" in capsys.readouterr().out
+    log.write_text(SIMPLE_LOG)  # a log from before identities
+    assert ingest_file(log, features)[2][0].startswith("log carries no program identity")

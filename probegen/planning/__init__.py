@@ -8,7 +8,7 @@ a plain flag so that planning never imports the dialects.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from probegen import ir
 from probegen.machine.profile import MachineProfile
@@ -21,6 +21,7 @@ from probegen.planning.actions import (
 )
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
+from probegen.planning.identity import program_identity
 from probegen.planning.order import Stop, Tour, order_stops
 from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.reroute import Sweeper
@@ -79,7 +80,8 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
 
 
 def plan_program(spec: Spec, *, runtime_variables: bool,
-                 progress: Callable[[int], None] | None = None) -> PlannedProgram:
+                 progress: Callable[[int], None] | None = None,
+                 check_collisions: bool = True) -> PlannedProgram:
     """Plan every feature of ``spec`` and check the whole path for collisions.
 
     Args:
@@ -87,6 +89,9 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         runtime_variables: whether the target controller computes at run time (Macro B
             yes, DMIS no); decides how a sphere of uncertain position is located.
         progress: called with 1 for every feature planned and every node checked.
+        check_collisions: run the collision check of the whole path (``False``: ``clearance`` is
+            empty; ``ingest`` needs the planned touches only, the features' own
+            planning still checks what it checks).
 
     Returns:
         The planned program.
@@ -148,7 +153,9 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         body += [n for f in freeform for n in f.nodes]
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
-    report = check_program(program, obstacle, plans, machine, progress=progress)
+    program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
+    report = (check_program(program, obstacle, plans, machine, progress=progress)
+              if check_collisions else ClearanceReport(()))
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,
                           tuple(freeform))
 

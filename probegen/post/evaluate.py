@@ -8,9 +8,11 @@ aligned, toleranced and written to a DMIS output file by the same code as on the
 virtual CMM (:mod:`probegen.dmisrun`): features of the DMIS kinds, with the CMM's
 fits (feature compensation, the cylinder fit started from the nominal axis).
 
-Checks: every touch of the map must be in the log (the last one read after a restart),
+Checks: the log is first checked against the map (:mod:`probegen.logcheck`: the run
+used, the program number and identity of the posted program, unknown and duplicate point
+ids); every touch of the map must be in the log (the last one read after a restart),
 in the log's units, and lie on its probing line (:data:`ON_LINE`) within its reach; a
-log that fails is refused with the touch and its DMIS line named.
+log that fails is refused with the touch, its log line and its DMIS line named.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
 from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
 from probegen.errors import IncompleteRunError, ResultsParseError
+from probegen.identity import PlannedTouch, map_identity
+from probegen.logcheck import check_log
 from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
 from probegen.results.dprnt import DprntLog, read_dprnt
 
@@ -39,9 +43,11 @@ class _Replay:
     """A ``Cmm`` whose probing moves return the logged ball centres in map order."""
 
     def __init__(self, fmap: FeatureMap, points: dict[tuple[str, int], Vec3],
-                 source: str, cut: dict[tuple[str, int], str] | None = None) -> None:
+                 source: str, cut: dict[tuple[str, int], str] | None = None,
+                 lines: dict[tuple[str, int], int] | None = None) -> None:
         self.fmap, self.points, self.source = fmap, points, source
         self.cut = cut or {}
+        self.lines = lines or {}
         self.used = 0
 
     @property
@@ -75,8 +81,9 @@ class _Replay:
         along = float(rel @ arr(t.direction))
         off = float(np.linalg.norm(rel - along * arr(t.direction)))
         if off > ON_LINE or not -ON_LINE <= along <= t.reach + ON_LINE:
+            where = f"{self.source}:{self.lines[key]}" if key in self.lines else self.source
             raise ResultsParseError(
-                f"{self.source}: PT {t.id} {t.index} (DMIS line {t.line}) at "
+                f"{where}: PT {t.id} {t.index} (DMIS line {t.line}) at "
                 f"{', '.join(f'{v:.4f}' for v in p)} is {off:.4f} mm off its probing line "
                 f"and {along:.4f} mm along it (reach {t.reach:g}): was the log written by "
                 "this program?")
@@ -97,9 +104,11 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
         DmisProgramError: the map's DMIS program is wrong (a changed map).
     """
     scale = MM_PER_INCH if fmap.units == "inch" else 1.0
+    latest = [t for t in log.latest_touches() if t.kind == "PT"]
     points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
-              for t in log.latest_touches() if t.kind == "PT"}
-    replay = _Replay(fmap, points, log.source, _cut(log))
+              for t in latest}
+    replay = _Replay(fmap, points, log.source, _cut(log),
+                     {(t.feature, t.index): t.line for t in latest})
     result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
     if replay.used != len(fmap.touches):
         raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
@@ -129,18 +138,26 @@ def run_status(log: DprntLog, result: DmisRunResult) -> str:
                   not_evaluated=bool(cut), complete=log.complete)
 
 
-def ingest_file(log: str | Path, features: str | Path) -> tuple[DprntLog, DmisRunResult]:
-    """Evaluate a captured DPRNT ``log`` with the feature map ``features``; return the
-    log read and the evaluation.
+def ingest_file(log: str | Path, features: str | Path, *, run: int | None = None,
+                ignore_identity: bool = False
+                ) -> tuple[DprntLog, DmisRunResult, tuple[str, ...]]:
+    """Evaluate a captured DPRNT ``log`` with the feature map ``features``; returns the
+    run of the log used, the DMIS run and the notes of the log's checks (``run``,
+    ``ignore_identity``: see :func:`probegen.logcheck.check_log`).
 
     Raises:
+        ProbegenError: the log belongs to another program, or names points the map
+            does not have.
         ResultsParseError: the log or the map cannot be used (see ``evaluate_log``);
             ``IncompleteRunError`` when a touch is missing from a run cut short.
     """
     fmap = read_feature_map(features)
     parse_dmis(fmap.text, source=fmap.source)  # a damaged map fails here, located
-    read = read_dprnt(log)
-    return read, evaluate_log(read, fmap)
+    planned = [PlannedTouch("PT", t.id, t.index, t.start, t.start, 0.0) for t in fmap.touches]
+    checked = check_log(read_dprnt(log), program=fmap.number,
+                        identity=map_identity(fmap.text, fmap.touches), touches=planned,
+                        run=run, ignore_identity=ignore_identity, plausibility=False)
+    return checked.log, evaluate_log(checked.log, fmap), checked.notes
 
 
 def results_table(result: DmisRunResult) -> str:

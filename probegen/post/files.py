@@ -8,12 +8,14 @@ its part's origin at (355, 91, -80), the simple part sits at the origin.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+from probegen import ir
 from probegen.dialects import get_dialect
 from probegen.dmis import read_dmis
 from probegen.errors import UnsupportedError
+from probegen.identity import map_identity
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import MeshObstacle, load_model
 from probegen.post.featuremap import FeatureMap, dumps, feature_map
@@ -68,9 +70,11 @@ def post_file(program: str | Path, machine: MachineProfile, model: str | Path, *
     posted = post_dmis(parsed, machine, obstacle=placed_obstacle(model, offset),
                        skip_unsupported=skip_unsupported, reroute=reroute,
                        number=number, name=program_name(program))
-    text = target.generate(posted.program)
     data = Path(program).read_bytes()  # read_dmis read it just now
-    return PostOutput(text, feature_map(posted, data, str(program), dialect), posted)
+    fmap = feature_map(posted, data, str(program), dialect)
+    setup = replace(posted.program.setup, identity=map_identity(fmap.text, fmap.touches))
+    text = target.generate(ir.Program(setup, posted.program.body))
+    return PostOutput(text, fmap, posted)
 
 
 def write_post(out: PostOutput, target: Path) -> Path:

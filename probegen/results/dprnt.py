@@ -40,6 +40,7 @@ from probegen.results.dprnt_records import (
     DprntLog,
     ProgramError,
     Result,
+    Run,
     Touch,
     _Builder,
 )
@@ -54,8 +55,10 @@ __all__ = [
     "DprntLog",
     "ProgramError",
     "Result",
+    "Run",
     "Touch",
     "decode_dprnt",
+    "log_lines",
     "parse_dprnt",
     "read_dprnt",
     "touches_array",
@@ -78,6 +81,12 @@ def _split_lines(text: str) -> list[str]:
     if _NOISE.search(text):
         text = _NOISE.sub("", text)
     return text.split("\n") if "\r" not in text else _LINE_BREAK.split(text)
+
+
+def log_lines(data: bytes | str) -> list[str]:
+    """The lines of a raw log as the reader numbers them (line ``k`` is ``[k - 1]``), noise
+    removed: for quoting a line in a diagnostic made after reading."""
+    return _split_lines(decode_dprnt(data) if isinstance(data, bytes) else data)
 
 
 def decode_dprnt(data: bytes) -> str:

@@ -49,6 +49,7 @@ _NAMES = {
     "AZ": "'Z'",
     "PROGNUM": "a program number (O and digits)",
     "VERSION": "a format version (V and digits)",
+    "IDENTITY": "a program identity (H and 8 hex digits)",
     "ERRCODE": "an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT)",
     "KEY": "a result name (letters)",
     "_PCT": "'%'",
@@ -74,7 +75,9 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
 
     def header(self, c: list[Token]) -> _Header:
         version = _digits(c[2], 1, "a format version")
-        return _Header(_program(c[1]), version, c[2].column or 0)
+        identity = str(c[3]) if len(c) > 3 else None
+        return _Header(_program(c[1]), version, c[2].column or 0, identity,
+                       c[3].column or 0 if len(c) > 3 else 0)
 
     def end(self, c: list[Token]) -> _End:
         return _End(_program(c[1]))

@@ -21,6 +21,10 @@ from probegen.errors import Diagnostic
 FORMAT_VERSION = 1
 """The log format version this reader understands (the ``V1`` of ``PGSTART``)."""
 
+IDENTITY_DIGITS = 8
+"""Hex digits of the program identity on ``PGSTART`` (``H`` and 8 digits: 32 bits of a
+SHA-256, see :mod:`probegen.planning.identity`)."""
+
 MAX_FEATURE_ID = 16
 """Longest feature id the Fanuc dialect prints."""
 
@@ -116,6 +120,31 @@ class ProgramError:
 
 
 @dataclass(frozen=True, slots=True)
+class Run:
+    """One run of the program in the log: a ``PGSTART`` and what follows it.
+
+    Attributes:
+        number: 0, 1, ... in log order (the ``run`` of its records).
+        start: line of its ``PGSTART``; 0 for records before any ``PGSTART``.
+        end: line of its ``PGEND``; 0 when the run was cut short.
+        program: the program number its ``PGSTART`` printed (None without one).
+        identity: the identity its ``PGSTART`` printed (``H`` and 8 hex digits), None
+            when it printed none (a program from before identities, or no ``PGSTART``).
+    """
+
+    number: int
+    start: int
+    end: int
+    program: int | None
+    identity: str | None
+
+    @property
+    def complete(self) -> bool:
+        """Whether the run ended with ``PGEND``."""
+        return self.end > 0
+
+
+@dataclass(frozen=True, slots=True)
 class DprntLog:
     """Everything read from one DPRNT log, good records and diagnostics side by side.
 
@@ -130,6 +159,7 @@ class DprntLog:
             earlier ``PGSTART`` or after records (a resumed or re-run program).
         diagnostics: one per malformed or out-of-place line, in line order.
         results: ``RES`` records in log order.
+        runs: one per run, in log order (see :class:`Run`).
     """
 
     source: str
@@ -141,6 +171,7 @@ class DprntLog:
     restarts: int
     diagnostics: tuple[Diagnostic, ...]
     results: tuple[Result, ...] = ()
+    runs: tuple[Run, ...] = ()
 
     def latest_touches(self) -> tuple[Touch, ...]:
         """Return one touch per (kind, feature, index), the last one read, in line order.
@@ -157,6 +188,8 @@ class _Header:
     program: int
     version: int
     version_column: int
+    identity: str | None = None
+    identity_column: int = 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -184,6 +217,9 @@ class _Builder:
         self.errors: list[ProgramError] = []
         self.results: list[Result] = []
         self.diagnostics: list[Diagnostic] = []
+        self.starts: dict[int, _Header] = {}
+        self.start_lines: dict[int, int] = {}
+        self.ends: dict[int, int] = {}
 
     def at(self, lineno: int, clean: str) -> None:
         """Move to line ``lineno`` (its text after cleaning)."""
@@ -228,12 +264,17 @@ class _Builder:
                 f"expected program O{self.program} (as in the first header), "
                 f"found O{rec.program}: one log per program"
             )
+        if rec.identity is not None and len(rec.identity) != 1 + IDENTITY_DIGITS:
+            # the run still starts: the wrong identity is kept and refused by ingest
+            self.diagnose(f"expected a program identity of H and {IDENTITY_DIGITS} hex "
+                          f"digits, found '{rec.identity}'", rec.identity_column)
         if rec.version != FORMAT_VERSION:
             message = f"expected format version V{FORMAT_VERSION}, found V{rec.version}"
             self.diagnose(message, rec.version_column)
         if self.started or self.headless_reported:
             self.run += 1
         self.started, self.end_line, self.run_program = True, 0, rec.program
+        self.starts[self.run], self.start_lines[self.run] = rec, self.lineno
 
     def _end(self, rec: _End) -> None:
         if self.run_program is not None and rec.program != self.run_program:
@@ -244,6 +285,7 @@ class _Builder:
         if self.program is None:
             self.program = rec.program
         self.end_line = self.lineno
+        self.ends.setdefault(self.run, self.lineno)
 
     def _check_place(self) -> None:
         """Diagnose a record outside PGSTART ... PGEND (the record is still kept)."""
@@ -271,7 +313,14 @@ class _Builder:
             restarts=self.run,
             diagnostics=tuple(self.diagnostics),
             results=tuple(self.results),
+            runs=tuple(self._run(k) for k in range(self.run + 1)),
         )
+
+    def _run(self, k: int) -> Run:
+        head = self.starts.get(k)
+        return Run(k, self.start_lines.get(k, 0), self.ends.get(k, 0),
+                   None if head is None else head.program,
+                   None if head is None else head.identity)
 
 
 def _first_column(clean: str) -> int:

@@ -55,8 +55,8 @@ def run(program, ball: float, centre: np.ndarray) -> list[str]:  # type: ignore[
     def val(c: ir.Coord) -> float:
         return values[c.name] + c.offset if isinstance(c, ir.Var) else c
 
-    num = program.setup.program_number
-    lines = ["%", f"PGSTART O{num:04d} V1"]
+    num, identity = program.setup.program_number, program.setup.identity
+    lines = ["%", f"PGSTART O{num:04d} V1 {identity}"]
     for node in ir.walk(program.body):
         if isinstance(node, ir.Assign):
             a = val(node.a)
