@@ -153,6 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="dialect to emit (repeatable; default: the spec's)")
     c.add_argument("-o", "--output", default="out",
                    help="output file, folder, or - for stdout (default: out/)")
+    c.add_argument("--calibration", metavar="FILE",
+                   help="probe calibration (from ingest --write-calibration) baked into "
+                        "the in-process actions; overrides the spec's [machine] calibration")
     c.set_defaults(func=_compile)
 
     f = sub.add_parser("features", help="list the faces of a STEP model")
@@ -186,6 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--calibration", help="probe calibration file to compensate with")
     i.add_argument("--write-calibration", metavar="FILE",
                    help="write the probe calibration a sphere test measured")
+    i.add_argument("--calibration-date", metavar="DATE",
+                   help="the date written into --write-calibration (ISO 8601, e.g. "
+                        "2026-11-26; never taken from the clock)")
     i.set_defaults(func=_ingest)
 
     cp = sub.add_parser("capture", help="record what the machine sends on a serial port")

@@ -16,12 +16,14 @@ CMM's and a CMM's results), any other as a DPRNT log."""
 
 
 def _ingest(args: argparse.Namespace) -> int:
-    from probegen.compensate import calibration_toml, load_calibration
+    from probegen.compensate import calibration_toml, check_date, load_calibration
     from probegen.ingest import ingest, to_table, write_outputs
     from probegen.spec import load_spec
 
     spec = load_spec(args.spec)
     cal = load_calibration(args.calibration) if args.calibration else None
+    date = check_date(args.calibration_date, "--calibration-date") \
+        if args.calibration_date else ""
     if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
         from probegen.ingest import ingest_dmis
 
@@ -40,9 +42,10 @@ def _ingest(args: argparse.Namespace) -> int:
             raise ProbegenError("--write-calibration: expected a sphere test in the spec, "
                                 "found none")
         target = Path(args.write_calibration)
-        target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
-                          encoding="utf-8", newline="\n")
-        print(f"wrote the probe calibration {target}")
+        written = result.results[0].calibration(str(args.log), date)
+        target.write_text(calibration_toml(written), encoding="utf-8", newline="\n")
+        print(f"wrote the probe calibration {target} ({written.fingerprint}"
+              f"{'' if date else ', undated: give --calibration-date'})")
     failed = (any(r.ok is False for r in result.results)
               or any(r.ok is False for r in result.revolved)
               or any(r.ok is False for r in result.freeform))

@@ -11,18 +11,32 @@ radius of a probe calibration) or a ``ProbeCalibration``: effective radii measur
 of directions by the sphere test (method M1), interpolated between them by inverse-distance
 weighting on the unit sphere (exact at the measured directions).
 
+Every caller that turns ball centres into contact points or sizes goes through one
+function, :func:`calibrated_centres`: it moves each ball centre by ``(r(n) − r_ref)``
+along its normal, so that offsetting the moved centre by the single reference radius
+``r_ref`` gives the calibrated contact point.  Fits on ball centres (the revolved kinds,
+the on-control fits of the in-process actions) then keep their one-radius offset
+arithmetic; :func:`compensate` is the same function with ``r_ref = 0``.
+
+A calibration is identified by its :attr:`ProbeCalibration.fingerprint` (a short hash of
+its file text), printed in the ``PGCAL`` line of a program compiled with it and in every
+output of ``ingest``.
+
 Calibration file (TOML, written by ``probegen ingest --write-calibration``)::
 
     [calibration]
     ball_radius = 3.0            # nominal, mm
     effective_radius = 2.9981    # mean effective radius, mm
     source = "run.log"
+    date = "2026-11-26"          # when the sphere test ran (--calibration-date); optional
     directions = [[0.0, 0.0, 1.0], ...]    # unit vectors, probe frame
     radii = [2.9979, ...]                  # effective radius in each direction, mm
 """
 
 from __future__ import annotations
 
+import datetime
+import hashlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +50,8 @@ from probegen.tomlread import Table, load_toml
 IDW_POWER = 4.0
 """Power of the inverse-distance weights: high enough that a direction's own radius
 dominates near it, low enough to blend smoothly between the measured directions."""
+UNCALIBRATED = "uncalibrated, nominal ball radius"
+"""What every output says when no calibration was used."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +64,7 @@ class ProbeCalibration:
         directions: unit vectors where the radius was measured.
         radii: the effective radius in each direction, mm.
         source: where the calibration came from.
+        date: when the sphere test ran (ISO 8601, from ``--calibration-date``), or "".
     """
 
     ball_radius: float
@@ -55,6 +72,20 @@ class ProbeCalibration:
     directions: tuple[tuple[float, float, float], ...]
     radii: tuple[float, ...]
     source: str = ""
+    date: str = ""
+
+    @property
+    def fingerprint(self) -> str:
+        """A short identity: ``C`` and 8 hex digits of the SHA-256 of the file text
+        (a letter first, so it prints and reads as one DPRNT word)."""
+        digest = hashlib.sha256(calibration_toml(self).encode("utf-8")).hexdigest()
+        return "C" + digest[:8].upper()
+
+    def describe(self) -> str:
+        """One line for every output: source, date and fingerprint."""
+        return (f"calibrated: {self.source or 'unknown source'}, "
+                f"{self.date or 'undated'}, fingerprint {self.fingerprint}, "
+                f"effective radius {self.effective_radius:.4f} mm")
 
     def radius(self, normals: ArrayLike) -> NDArray[np.float64]:
         """Effective radius for each approach normal ``normals : (n, 3)``; returns (n,)."""
@@ -70,6 +101,50 @@ class ProbeCalibration:
         return np.asarray((w @ r) / w.sum(axis=1))
 
 
+def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: ProbeCalibration,
+                       reference: float) -> NDArray[np.float64]:
+    """Ball centres moved so that one radius ``reference`` compensates them as the
+    calibration would: ``O' = O − (r(n) − reference)·n``.
+
+    The one place a calibration meets ball centres (every feature kind, the actions,
+    free-form, the rotary and post paths call it, directly or through
+    :func:`compensate`).
+
+    Args:
+        centres: (n, 3) ball centres, mm.
+        normals: (n, 3) outward surface normals (from the surface towards the ball),
+            need not be unit.
+        calibration: the probe calibration.
+        reference: the radius the caller offsets the moved centres by, mm.
+
+    Returns:
+        (n, 3) moved ball centres, mm.
+    """
+    o = np.asanyarray(centres, dtype=np.float64).reshape(-1, 3)
+    n = np.asanyarray(normals, dtype=np.float64).reshape(-1, 3)
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    return np.asarray(o - (calibration.radius(n) - reference)[:, None] * n)
+
+
+def calibration_state(calibration: ProbeCalibration | None) -> dict[str, object]:
+    """The calibration as every output records it (``results.json`` ``calibration``)."""
+    if calibration is None:
+        return {"state": UNCALIBRATED}
+    return {"state": calibration.describe(), "source": calibration.source,
+            "date": calibration.date, "fingerprint": calibration.fingerprint,
+            "effective_radius": float(f"{calibration.effective_radius:.7f}")}
+
+
+def check_date(text: str, where: str) -> str:
+    """An ISO 8601 date or date-time, as given; a ``ProbegenError`` otherwise."""
+    try:
+        datetime.datetime.fromisoformat(text)
+    except ValueError:
+        raise SpecError(f"{where}: expected an ISO 8601 date (2026-11-26 or "
+                        f"2026-11-26T10:30), found {text!r}") from None
+    return text
+
+
 def compensate(centres: ArrayLike, normals: ArrayLike,
                radius: float | ProbeCalibration) -> NDArray[np.float64]:
     """Contact points ``P = O − r(n)·n``.
@@ -82,11 +157,12 @@ def compensate(centres: ArrayLike, normals: ArrayLike,
     Returns:
         (n, 3) float contact points.
     """
+    if isinstance(radius, ProbeCalibration):
+        return calibrated_centres(centres, normals, radius, 0.0)
     o = np.asanyarray(centres, dtype=np.float64).reshape(-1, 3)
     n = np.asanyarray(normals, dtype=np.float64).reshape(-1, 3)
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    r = radius.radius(n) if isinstance(radius, ProbeCalibration) else np.full(len(n), radius)
-    return np.asarray(o - r[:, None] * n)
+    return np.asarray(o - radius * n)
 
 
 def load_calibration(path: str | Path) -> ProbeCalibration:
@@ -102,6 +178,7 @@ def load_calibration(path: str | Path) -> ProbeCalibration:
         directions=_directions(t, directions),
         radii=_radii(t, radii),
         source=t.get_str("source", "") or "",
+        date=_date(t),
     )
     if len(cal.directions) != len(cal.radii):
         raise SpecError(f"{t.where('radii')}: expected one radius per direction "
@@ -109,6 +186,11 @@ def load_calibration(path: str | Path) -> ProbeCalibration:
     t.done()
     root.done()
     return cal
+
+
+def _date(t: Table) -> str:
+    text = t.get_str("date", "") or ""
+    return check_date(text, t.where("date")) if text else ""
 
 
 def _directions(t: Table, value: object) -> tuple[tuple[float, float, float], ...]:
@@ -143,7 +225,8 @@ def calibration_toml(cal: ProbeCalibration) -> str:
         f"ball_radius = {cal.ball_radius:.7f}\n"
         f"effective_radius = {cal.effective_radius:.7f}\n"
         f"source = {_quote(cal.source)}\n"
-        f"directions = [\n    {dirs},\n]\n"
+        + (f"date = {_quote(cal.date)}\n" if cal.date else "")
+        + f"directions = [\n    {dirs},\n]\n"
         f"radii = [{radii}]\n"
     )
 

@@ -64,12 +64,14 @@ class SphereTestResult:
         directions: (n) nominal approach normals of the points.
         nominal_centre: nominal (or located) centre, mm.
         calibrated_diameter: the sphere's certified diameter, mm.
-        ball_radius: the radius the points were compensated with (nominal), mm.
+        ball_radius: the radius the points were compensated with (the nominal one, or a
+            calibration's mean effective radius), mm.
         p_ftu: probing form error, mm.
         p_stu: probing size error, mm.
         effective_radius: mean effective stylus radius, mm.
         radii: effective radius in each direction, mm.
         characteristics: the checked quantities.
+        nominal_radius: the stylus's nominal ball radius, mm (0: ``ball_radius``).
     """
 
     feature: str
@@ -84,6 +86,7 @@ class SphereTestResult:
     effective_radius: float
     radii: tuple[float, ...]
     characteristics: tuple[Characteristic, ...]
+    nominal_radius: float = 0.0
 
     @property
     def ok(self) -> bool | None:
@@ -91,16 +94,18 @@ class SphereTestResult:
         checks = [c.ok for c in self.characteristics if c.ok is not None]
         return all(checks) if checks else None
 
-    def calibration(self, source: str = "") -> ProbeCalibration:
-        """The probe calibration this test measured."""
-        return ProbeCalibration(self.ball_radius, self.effective_radius, self.directions,
-                                self.radii, source)
+    def calibration(self, source: str = "", date: str = "") -> ProbeCalibration:
+        """The probe calibration this test measured (its ``ball_radius`` the nominal)."""
+        return ProbeCalibration(self.nominal_radius or self.ball_radius,
+                                self.effective_radius, self.directions, self.radii, source,
+                                date)
 
 
 def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,
                          nominal_centre: Vec3, calibrated_diameter: float, ball_radius: float,
                          form: float | None = None, size: float | None = None,
-                         position: float | None = None) -> SphereTestResult:
+                         position: float | None = None,
+                         nominal_radius: float | None = None) -> SphereTestResult:
     """Evaluate the sphere test from compensated contact points.
 
     Args:
@@ -113,11 +118,14 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         form: limit of P_FTU, or None.
         size: limit of |P_STU|, or None.
         position: limit of the centre's distance from nominal, or None.
+        nominal_radius: the nominal ball radius (default ``ball_radius``), mm: the
+            nominal of ``R_EFF`` and the ``ball_radius`` of the calibration written.
 
     Returns:
         The result with its characteristics.
     """
     p = np.asanyarray(points, dtype=np.float64)
+    r_nom = ball_radius if nominal_radius is None else nominal_radius
     fit = fit_sphere(p)
     r_cal = calibrated_diameter / 2.0
     radial = np.linalg.norm(p - np.asarray(fit.centre), axis=1)
@@ -132,8 +140,8 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
                        None if size is None else -size, size),
         Characteristic("P_FTU", p_ftu, 0.0, p_ftu, None, form),
         Characteristic("P_STU", p_stu, 0.0, p_stu, None if size is None else -size, size),
-        Characteristic("R_EFF", ball_radius + fit.radius - r_cal, ball_radius,
-                       fit.radius - r_cal),
+        Characteristic("R_EFF", ball_radius + fit.radius - r_cal, r_nom,
+                       ball_radius + fit.radius - r_cal - r_nom),
     ]
     return SphereTestResult(
         feature=feature, fit=fit, points=_tuples(p), directions=_tuples(directions),
@@ -141,7 +149,7 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         ball_radius=ball_radius, p_ftu=p_ftu, p_stu=p_stu,
         effective_radius=ball_radius + fit.radius - r_cal,
         radii=tuple(float(x) for x in ball_radius + radial - r_cal),
-        characteristics=tuple(chars),
+        characteristics=tuple(chars), nominal_radius=r_nom,
     )
 
 

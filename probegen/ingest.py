@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from probegen.compensate import ProbeCalibration, compensate
+from probegen.compensate import ProbeCalibration, calibration_state, compensate
 from probegen.errors import ProbegenError
 from probegen.evaluate import SphereTestResult, evaluate_sphere_test
 from probegen.evaluate_freeform import (
@@ -70,6 +70,8 @@ class Ingested:
         decisions: the in-process decisions' values, offline and as the machine
             printed them (``ingest_actions``).
         freeform: one evaluated result per free-form feature with touches.
+        calibration: the probe calibration the results were compensated with, or None
+            (the nominal ball radius).
     """
 
     source: str
@@ -80,6 +82,34 @@ class Ingested:
     revolved: tuple[RevolvedResult, ...] = ()
     decisions: tuple[Decision, ...] = ()
     freeform: tuple[FreeformResult, ...] = ()
+    calibration: ProbeCalibration | None = None
+
+    @property
+    def calibration_text(self) -> str:
+        """What every output says about the calibration used."""
+        return str(calibration_state(self.calibration)["state"])
+
+
+def calibration_notes(log: DprntLog, calibration: ProbeCalibration | None) -> list[str]:
+    """Warnings when the log's ``PGCAL`` (the calibration its program was compiled with)
+    is not the calibration the results use."""
+    marks = sorted({m.fingerprint for m in log.calibrations})
+    if not marks:
+        if calibration is None:
+            return []
+        return [f"the program was compiled without a probe calibration (no PGCAL line): "
+                f"the values it computed on the control used the nominal ball radius, "
+                f"the results use calibration {calibration.fingerprint}"]
+    if calibration is None:
+        return [f"the program was compiled with probe calibration {', '.join(marks)} "
+                f"(PGCAL) but none was given (--calibration): the results use the "
+                f"nominal ball radius"]
+    other = [m for m in marks if m != calibration.fingerprint]
+    if other:
+        return [f"the program was compiled with probe calibration {', '.join(other)} "
+                f"(PGCAL), the results use {calibration.fingerprint} "
+                f"({calibration.source or 'unknown source'})"]
+    return []
 
 
 def ingest(log_path: str | Path, spec: Spec, *,
@@ -87,12 +117,15 @@ def ingest(log_path: str | Path, spec: Spec, *,
     """Read a DPRNT log and evaluate every feature of ``spec`` it has touches for.
 
     ``with_path`` also plans the whole program again (with its collision check) to
-    record the nominal stylus path for the report.
+    record the nominal stylus path for the report.  ``calibration`` defaults to the
+    spec's ``[machine] calibration``.
     """
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
+    calibration = calibration or spec.machine.calibration
     log = read_dprnt(log_path)
-    notes = [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
+    notes = calibration_notes(log, calibration)
+    notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
              for e in log.errors]
     if not log.complete:
         notes.append("the log has no PGEND line: the program did not finish")
@@ -102,7 +135,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
     freeform: list[FreeformResult] = []
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            found_r = _revolved(feature, spec, touches, notes)
+            found_r = _revolved(feature, spec, touches, notes, calibration)
             if found_r is not None:
                 revolved.append(found_r)
             continue
@@ -125,13 +158,16 @@ def ingest(log_path: str | Path, spec: Spec, *,
             continue
         centres = np.array([touches[(feature.id, k)] for k in found])
         normals = np.array([plan.directions[k - 1] for k in found])
-        r = spec.machine.probe.ball_radius if calibration is None else calibration
+        # One radius, not the map: the sphere test measures the map (P_FTU, the radii
+        # by direction); compensating it with the map would hide what it measures.
+        r = spec.machine.probe.ball_radius if calibration is None else \
+            calibration.effective_radius
         points = compensate(centres, normals, r)
         tol = feature.tolerance
         results.append(evaluate_sphere_test(
             feature.id, points, normals, nominal_centre=sphere.centre,
-            calibrated_diameter=sphere.diameter,
-            ball_radius=r if isinstance(r, float) else r.effective_radius,
+            calibrated_diameter=sphere.diameter, ball_radius=r,
+            nominal_radius=spec.machine.probe.ball_radius,
             form=tol.form, size=tol.size, position=tol.position))
     if not results and not revolved and not freeform:
         raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
@@ -143,7 +179,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
         segments = plan_program(spec, runtime_variables=True).clearance.segments
         path = tuple((s.feature, s.kind, s.start, s.end) for s in segments)
     return Ingested(str(log_path), log, tuple(results), tuple(notes), path, tuple(revolved),
-                    decisions(spec, log), tuple(freeform))
+                    decisions(spec, log, calibration), tuple(freeform), calibration)
 
 
 def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
@@ -223,7 +259,8 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Freeform
 
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], Vec3],
-              notes: list[str]) -> RevolvedResult | None:
+              notes: list[str], calibration: ProbeCalibration | None = None
+              ) -> RevolvedResult | None:
     """Evaluate a revolved feature from its touches (too few, or a failed fit: a note)."""
     from probegen.planning.revolved_spec import plan_revolved
 
@@ -243,7 +280,8 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], 
     try:
         return evaluate_revolved(
             feature.id, nominal_of(plan), [touches[(feature.id, k)] for k in found], which,
-            ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance)
+            ball_radius=spec.machine.probe.ball_radius if calibration is None else calibration,
+            limits=feature.tolerance)
     except ProbegenError as exc:
         notes.append(f"feature {feature.id}: not evaluated: {exc}")
         return None
@@ -285,6 +323,7 @@ def to_json(ing: Ingested) -> str:
         "source": ing.source,
         "program": ing.log.program,
         "complete": ing.log.complete,
+        "calibration": calibration_state(ing.calibration),
         "notes": list(ing.notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
         "features": [_feature_json(r) for r in ing.results]
@@ -389,14 +428,15 @@ def to_csv(ing: Ingested) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
-                "upper", "status"])
+                "upper", "status", "calibration"])
     rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
         *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                         f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
-                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok)])
+                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok),
+                        ing.calibration_text])
     return buf.getvalue()
 
 
@@ -409,7 +449,7 @@ def to_table(ing: Ingested) -> str:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                          f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))
-    text = _columns(rows)
+    text = f"probe: {ing.calibration_text}\n" + _columns(rows)
     if ing.decisions:
         text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
             (d.feature, d.key, _opt(d.offline), _opt(d.machine),

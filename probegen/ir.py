@@ -78,6 +78,9 @@ class Setup:
         variable_base: first controller variable the program may use.
         reset_codes: modal codes set in the header (see ``MachineProfile``).
         probe_length: stylus length from the ball centre, mm.
+        calibration: the probe calibration's header comment lines (upper case, no
+            parentheses) when the program was compiled with one, else empty.
+        calibration_id: its fingerprint (printed in the ``PGCAL`` line), or "".
     """
 
     program_number: int
@@ -96,6 +99,8 @@ class Setup:
     variable_base: int
     reset_codes: tuple[str, ...]
     probe_length: float
+    calibration: tuple[str, ...] = ()
+    calibration_id: str = ""
 
 
 @dataclass(frozen=True, slots=True)

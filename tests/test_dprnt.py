@@ -206,9 +206,9 @@ MALFORMED = [
     (
         "PTX SPH1 1 X1 Y2 Z3",
         1,
-        "expected a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
+        "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
     ),
-    ("%PX 1", 2, "expected a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
+    ("%PX 1", 2, "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
     ("ERR NOTUCH SPH1 1", 5,
      "expected an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT), found 'NOTUCH'"),
     ("ERR NOTOUCH SPH1", 17, "expected an index, found end of line"),

@@ -91,6 +91,22 @@ class Result:
     run: int = 0
 
 
+@dataclass(frozen=True, slots=True)
+class CalibrationMark:
+    """A ``PGCAL`` record: the fingerprint of the probe calibration the program was
+    compiled with (``compensate.ProbeCalibration.fingerprint``).
+
+    Attributes:
+        fingerprint: e.g. ``C1A2B3C4D``.
+        line: 1-based line number in the log.
+        run: the program run it belongs to (see :attr:`Touch.run`).
+    """
+
+    fingerprint: str
+    line: int
+    run: int = 0
+
+
 ErrorCode = Literal["NOTOUCH", "COLLISION", "OUTTOL", "BIGCORR", "BADFIT"]
 """``ERR`` codes: no skip signal, signal on a guarded move, a feature out of tolerance,
 a tool correction beyond its maximum, touches that fit no circle."""
@@ -130,6 +146,7 @@ class DprntLog:
             earlier ``PGSTART`` or after records (a resumed or re-run program).
         diagnostics: one per malformed or out-of-place line, in line order.
         results: ``RES`` records in log order.
+        calibrations: ``PGCAL`` records in log order.
     """
 
     source: str
@@ -141,6 +158,7 @@ class DprntLog:
     restarts: int
     diagnostics: tuple[Diagnostic, ...]
     results: tuple[Result, ...] = ()
+    calibrations: tuple[CalibrationMark, ...] = ()
 
     def latest_touches(self) -> tuple[Touch, ...]:
         """Return one touch per (kind, feature, index), the last one read, in line order.
@@ -164,7 +182,7 @@ class _End:
     program: int
 
 
-_Record = Touch | Centre | ProgramError | Result | _Header | _End
+_Record = Touch | Centre | ProgramError | Result | CalibrationMark | _Header | _End
 
 
 class _Builder:
@@ -183,6 +201,7 @@ class _Builder:
         self.centres: list[Centre] = []
         self.errors: list[ProgramError] = []
         self.results: list[Result] = []
+        self.calibrations: list[CalibrationMark] = []
         self.diagnostics: list[Diagnostic] = []
 
     def at(self, lineno: int, clean: str) -> None:
@@ -211,6 +230,8 @@ class _Builder:
             self.centres.append(rec)
         elif isinstance(rec, Result):
             self.results.append(rec)
+        elif isinstance(rec, CalibrationMark):
+            self.calibrations.append(rec)
         else:
             self.errors.append(rec)
 
@@ -271,6 +292,7 @@ class _Builder:
             restarts=self.run,
             diagnostics=tuple(self.diagnostics),
             results=tuple(self.results),
+            calibrations=tuple(self.calibrations),
         )
 
 
