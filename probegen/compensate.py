@@ -8,8 +8,17 @@ normal.
 
 The effective radius is either one number (the nominal ball radius, or the mean effective
 radius of a probe calibration) or a ``ProbeCalibration``: effective radii measured in a set
-of directions by the sphere test (method M1), interpolated between them by inverse-distance
-weighting on the unit sphere (exact at the measured directions).
+of directions by the sphere test (method M1), and between them a smooth least-squares map
+(harmonic polynomials up to degree 3: the axial/lateral and 3-lobe parts of a kinematic
+probe's pre-travel) plus the inverse-distance weighted misfit (exact at the measured
+directions).  Inverse-distance weighting alone is off by a third of the lobe amplitude
+half-way between two measured directions 30° apart; the smooth map follows the lobes.
+
+The sphere test cannot tell a pre-travel term linear in the direction (``v·n``) from a
+shift of the sphere's centre: its map holds no such term.  Sizes (diameters, widths) are
+blind to it; a position found from one side (a plane touched from above) carries it.  A
+probe whose axial and lateral pre-travel differ has such a term on a test of the upper
+hemisphere (``docs/results.md``, calibration).
 
 Every caller that turns ball centres into contact points or sizes goes through one
 function, :func:`calibrated_centres`: it moves each ball centre by ``(r(n) − r_ref)``
@@ -88,17 +97,55 @@ class ProbeCalibration:
                 f"effective radius {self.effective_radius:.4f} mm")
 
     def radius(self, normals: ArrayLike) -> NDArray[np.float64]:
-        """Effective radius for each approach normal ``normals : (n, 3)``; returns (n,)."""
+        """Effective radius for each approach normal ``normals : (n, 3)``; returns (n,).
+
+        A smooth map (least-squares polynomial in the direction's components, see
+        :func:`_basis`) plus the inverse-distance weighted misfit at the measured
+        directions: exact at each measured direction, smooth between them."""
         n = np.asanyarray(normals, dtype=np.float64).reshape(-1, 3)
         if not self.directions:
             return np.full(len(n), self.effective_radius)
         d = np.asarray(self.directions)
         r = np.asarray(self.radii)
+        k, coef = _smooth_map(d, r)
+        misfit = r - _basis(d)[:, :k] @ coef
         dist = np.linalg.norm(n[:, None, :] - d[None, :, :], axis=2)
         exact = dist < 1e-12
         w = 1.0 / np.maximum(dist, 1e-12) ** IDW_POWER
         w = np.where(exact.any(axis=1, keepdims=True), exact.astype(float), w)
-        return np.asarray((w @ r) / w.sum(axis=1))
+        return np.asarray(_basis(n)[:, :k] @ coef + (w @ misfit) / w.sum(axis=1))
+
+
+def _basis(n: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The smooth map's terms at unit directions (n, 3): the harmonic polynomials of
+    degree 0 (1 term), 1 (3), 2 (5) and 3 (7), in that order.  A kinematic probe's
+    pre-travel is the sum of an axial/lateral part (degree 0 and 2) and its 3-lobe part
+    (degree 3, ``x³ − 3xy²``), so 16 terms hold it whole."""
+    x, y, z = n[:, 0], n[:, 1], n[:, 2]
+    return np.stack([np.ones(len(n)), x, y, z,
+                     x * x - y * y, x * y, x * z, y * z, 3.0 * z * z - 1.0,
+                     x**3 - 3.0 * x * y * y, 3.0 * x * x * y - y**3, z * (x * x - y * y),
+                     x * y * z, x * (5.0 * z * z - 1.0), y * (5.0 * z * z - 1.0),
+                     z * (5.0 * z * z - 3.0)], axis=1)
+
+
+MAP_TERMS = (16, 9, 4, 1)
+"""Terms of the smooth map tried in turn (degree 3, 2, 1, 0): the first with at least
+as many directions as terms and a condition number below :data:`MAP_CONDITION`."""
+MAP_CONDITION = 1e4
+"""Largest condition number of the smooth map's design matrix (the directions of a
+sphere test on one hemisphere keep the degree-3 map near 150)."""
+
+
+def _smooth_map(d: NDArray[np.float64], r: NDArray[np.float64]
+                ) -> tuple[int, NDArray[np.float64]]:
+    """The number of terms and the least-squares coefficients of the smooth map."""
+    basis = _basis(d)
+    for k in MAP_TERMS:
+        if len(d) >= k and np.linalg.cond(basis[:, :k]) < MAP_CONDITION:
+            coef = np.linalg.lstsq(basis[:, :k], r, rcond=None)[0]
+            return k, np.asarray(coef)
+    return 1, np.array([float(np.mean(r))])
 
 
 def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: ProbeCalibration,
