@@ -127,10 +127,13 @@ def _post(args: argparse.Namespace) -> int:
 
 
 def _post_ingest(args: argparse.Namespace) -> int:
+    from probegen.compensate import UNCALIBRATED, load_calibration
     from probegen.post.evaluate import ingest_file, results_table
 
-    result = ingest_file(args.log, args.features)
+    cal = load_calibration(args.calibration) if args.calibration else None
+    result = ingest_file(args.log, args.features, cal)
     Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
+    print(f"probe: {UNCALIBRATED if cal is None else cal.describe()}")
     sys.stdout.write(results_table(result))
     print(f"wrote {args.output}")
     failed = any(not t.in_tolerance for t in result.tolerances.values())
@@ -288,6 +291,8 @@ def _post_parsers(sub: Any) -> None:
                     help="the feature map written by probegen post")
     pi.add_argument("-o", "--output", default="results.dmo",
                     help="the DMIS output file (default results.dmo)")
+    pi.add_argument("--calibration", metavar="FILE",
+                    help="probe calibration (ingest --write-calibration) to compensate with")
     pi.set_defaults(func=_post_ingest)
 
 

@@ -149,7 +149,8 @@ def _smooth_map(d: NDArray[np.float64], r: NDArray[np.float64]
 
 
 def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: ProbeCalibration,
-                       reference: float) -> NDArray[np.float64]:
+                       reference: float, *, probe_normals: ArrayLike | None = None
+                       ) -> NDArray[np.float64]:
     """Ball centres moved so that one radius ``reference`` compensates them as the
     calibration would: ``O' = O − (r(n) − reference)·n``.
 
@@ -163,6 +164,8 @@ def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: Prob
             need not be unit.
         calibration: the probe calibration.
         reference: the radius the caller offsets the moved centres by, mm.
+        probe_normals: the same normals in the probe frame, where the calibration's
+            map is (a head tilted by a rotary axis); default ``normals``.
 
     Returns:
         (n, 3) moved ball centres, mm.
@@ -170,7 +173,9 @@ def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: Prob
     o = np.asanyarray(centres, dtype=np.float64).reshape(-1, 3)
     n = np.asanyarray(normals, dtype=np.float64).reshape(-1, 3)
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    return np.asarray(o - (calibration.radius(n) - reference)[:, None] * n)
+    look = n if probe_normals is None else \
+        np.asanyarray(probe_normals, dtype=np.float64).reshape(-1, 3)
+    return np.asarray(o - (calibration.radius(look) - reference)[:, None] * n)
 
 
 def calibration_state(calibration: ProbeCalibration | None) -> dict[str, object]:

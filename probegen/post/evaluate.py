@@ -8,6 +8,12 @@ aligned, toleranced and written to a DMIS output file by the same code as on the
 virtual CMM (:mod:`probegen.dmisrun`): features of the DMIS kinds, with the CMM's
 fits (feature compensation, the cylinder fit started from the nominal axis).
 
+With a probe calibration (``post-ingest --calibration``) each replayed ball centre is
+first moved by ``r(n) − r`` along its normal (``compensate.calibrated_centres``, ``n`` the
+reverse of the probing direction, ``r`` the posted ball radius the DMIS program
+compensates with), so the CMM code's one-radius compensation gives the calibrated
+contact point.
+
 Checks: every touch of the map must be in the log (the last one read after a restart),
 in the log's units, and lie on its probing line (:data:`ON_LINE`) within its reach; a
 log that fails is refused with the touch and its DMIS line named.
@@ -19,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from probegen.compensate import ProbeCalibration, calibrated_centres
 from probegen.constants import MM_PER_INCH
 from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
@@ -39,8 +46,9 @@ class _Replay:
     """A ``Cmm`` whose probing moves return the logged ball centres in map order."""
 
     def __init__(self, fmap: FeatureMap, points: dict[tuple[str, int], Vec3],
-                 source: str) -> None:
+                 source: str, calibration: ProbeCalibration | None = None) -> None:
         self.fmap, self.points, self.source = fmap, points, source
+        self.calibration = calibration
         self.used = 0
 
     @property
@@ -58,7 +66,12 @@ class _Replay:
                                     f"than the feature map lists ({len(self.fmap.touches)})")
         touch = self.fmap.touches[self.used]
         self.used += 1
-        return self._checked(touch)
+        found = self._checked(touch)
+        if self.calibration is None:
+            return found
+        moved = calibrated_centres([found], [-arr(touch.direction)], self.calibration,
+                                   self.ball_radius)
+        return vec3(moved[0])
 
     def _checked(self, t: PostTouch) -> Vec3:
         key = (t.id, t.index)
@@ -79,8 +92,10 @@ class _Replay:
         return vec3(p)
 
 
-def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
-    """Run the map's DMIS program on the logged touches (see the module docstring).
+def evaluate_log(log: DprntLog, fmap: FeatureMap,
+                 calibration: ProbeCalibration | None = None) -> DmisRunResult:
+    """Run the map's DMIS program on the logged touches (see the module docstring),
+    with the probe calibration's radii when one is given.
 
     Returns:
         The DMIS run: output file text, actual and nominal features (work coordinates,
@@ -93,7 +108,7 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
     scale = MM_PER_INCH if fmap.units == "inch" else 1.0
     points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
               for t in log.latest_touches() if t.kind == "PT"}
-    replay = _Replay(fmap, points, log.source)
+    replay = _Replay(fmap, points, log.source, calibration)
     result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
     if replay.used != len(fmap.touches):
         raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
@@ -101,7 +116,8 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
     return result
 
 
-def ingest_file(log: str | Path, features: str | Path) -> DmisRunResult:
+def ingest_file(log: str | Path, features: str | Path,
+                calibration: ProbeCalibration | None = None) -> DmisRunResult:
     """Evaluate a captured DPRNT ``log`` with the feature map ``features``.
 
     Raises:
@@ -109,7 +125,7 @@ def ingest_file(log: str | Path, features: str | Path) -> DmisRunResult:
     """
     fmap = read_feature_map(features)
     parse_dmis(fmap.text, source=fmap.source)  # a damaged map fails here, located
-    return evaluate_log(read_dprnt(log), fmap)
+    return evaluate_log(read_dprnt(log), fmap, calibration)
 
 
 def results_table(result: DmisRunResult) -> str:
