@@ -100,8 +100,9 @@ def _qif(args: argparse.Namespace) -> int:
             raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
         spec = load_spec(args.spec)
         cal = load_calibration(args.calibration) if args.calibration else None
-        text, notes = ingested_to_qif(ingest(args.input, spec, calibration=cal),
-                                      spec=spec), ()
+        ingested = ingest(args.input, spec, calibration=cal)
+        text, notes = ingested_to_qif(ingested, spec=spec), ingested.notes
+        print(f"probe: {ingested.calibration_text}")
     path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
     for note in notes:
         print(f"note: {note}")

@@ -13,7 +13,10 @@ Optional keys the report understands beyond ``ingest``'s output:
 * ``calibration.functions``: ``[{"name", "positions", "values", "unit"?}]``, identified
   error functions (rotary axis M4, 21 terms M5), drawn as line plots.
 
-``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too.
+``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too;
+so is ``calibration.state``, which probe calibration the results were compensated with
+(``ingest`` always writes it: "uncalibrated, nominal ball radius" or the calibration's
+source, date and fingerprint).
 """
 
 from __future__ import annotations
@@ -163,6 +166,7 @@ class Results:
     probe: ProbeRadii | None
     functions: tuple[Function, ...]
     decisions: tuple[Decision, ...] = ()
+    calibration: str = ""
 
 
 def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Results:
@@ -195,6 +199,7 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         decisions=tuple(_decision(r, d, f"decisions[{i}]")
                         for i, d in enumerate(r.items(root.get("decisions", []),
                                                       "decisions"))),
+        calibration=r.text(cal.get("state", ""), "calibration.state"),
     )
 
 
