@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO, sample_script
+from conftest import REPO, assert_golden, sample_script
 
 from probegen import cad
 from probegen.cli import main
@@ -307,3 +307,19 @@ def test_unequal_axial_pretravel_keeps_sizes(tmp: Path, models: dict[str, cad.Mo
     found = revolved_values(ingest(log, spec, calibration=cal))
     assert found["BORE"]["D"] == pytest.approx(50.0, abs=UM)
     assert found["BOSS"]["D"] == pytest.approx(20.0, abs=UM)
+
+
+CAL_DATA = REPO / "tests/data/calibration/probe.cal.toml"
+
+
+def test_calibrated_program_is_golden(in_repo: Path, tmp_path: Path) -> None:
+    """The setup program compiled with the sample sphere test's calibration (written
+    again here byte for byte): header, PGCAL line and the per-touch corrections."""
+    again = tmp_path / "probe.cal.toml"
+    assert main(["-q", "ingest", "samples/sphere25/sphere_test.log", "--spec",
+                 "samples/sphere25/sphere_test.toml", "-o", str(tmp_path / "out"),
+                 "--write-calibration", str(again), "--calibration-date", "2026-11-26"]) == 0
+    assert again.read_bytes() == CAL_DATA.read_bytes()
+    spec = spec_with(SAMPLES / "bore_block/bore_block_actions.toml", load_calibration(again))
+    text = get_dialect("fanuc").generate(plan_program(spec, runtime_variables=True).program)
+    assert_golden(REPO / "tests/golden/bore_block/bore_block_actions.calibrated.nc", text)

@@ -92,15 +92,15 @@ class _Checker:
     def calibrate(self) -> None:
         """Move each stored ball centre by its calibration correction (none without a
         calibration, or where it prints as 0)."""
-        if not self.node.corrections:
-            return
-        self.emit("(PROBE CALIBRATION: EFFECTIVE RADIUS BY DIRECTION)")
+        lines = []
         for k, vector in enumerate(self.node.corrections):
             for a in range(3):
                 name = self.node.points[k][a]
                 step = minus(self.d, -vector[a])
                 if name is not None and step:
-                    self.emit(f"{self.d.var(name)}={self.d.var(name)}{step}")
+                    lines.append(f"{self.d.var(name)}={self.d.var(name)}{step}")
+        if lines:
+            self.emit("(PROBE CALIBRATION: EFFECTIVE RADIUS BY DIRECTION)", *lines)
 
     def means(self, axes: tuple[int, ...]) -> None:
         count = len(self.node.points)
