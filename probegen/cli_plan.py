@@ -57,9 +57,10 @@ def with_calibration(spec: Any, path: str | None) -> Any:
         return spec
     from dataclasses import replace
 
-    from probegen.compensate import load_calibration
+    from probegen.compensate import for_stylus, load_calibration
 
-    return replace(spec, machine=replace(spec.machine, calibration=load_calibration(path)))
+    cal = for_stylus(load_calibration(path), spec.machine.probe.ball_radius, "--calibration")
+    return replace(spec, machine=replace(spec.machine, calibration=cal))
 
 
 def _print_freeform(planned: Any, indent: str) -> None:

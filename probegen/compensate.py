@@ -178,6 +178,23 @@ def calibrated_centres(centres: ArrayLike, normals: ArrayLike, calibration: Prob
     return np.asarray(o - (calibration.radius(look) - reference)[:, None] * n)
 
 
+STYLUS_MATCH = 1e-6
+"""Largest difference (mm) between a calibration's nominal ball radius and the stylus
+it is used with."""
+
+
+def for_stylus(calibration: ProbeCalibration | None, ball_radius: float,
+               where: str) -> ProbeCalibration | None:
+    """``calibration`` when it was measured with a ball of ``ball_radius`` (mm);
+    a ``SpecError`` naming ``where`` otherwise (a calibration of another stylus)."""
+    if calibration is not None and abs(calibration.ball_radius - ball_radius) > STYLUS_MATCH:
+        raise SpecError(f"{where}: expected a probe calibration of a {2 * ball_radius:g} mm "
+                        f"ball (the stylus used), found one of a "
+                        f"{2 * calibration.ball_radius:g} mm ball "
+                        f"({calibration.source or 'unknown source'})")
+    return calibration
+
+
 def calibration_state(calibration: ProbeCalibration | None) -> dict[str, object]:
     """The calibration as every output records it (``results.json`` ``calibration``)."""
     if calibration is None:

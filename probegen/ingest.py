@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from probegen.compensate import ProbeCalibration, calibration_state, compensate
+from probegen.compensate import ProbeCalibration, calibration_state, compensate, for_stylus
 from probegen.errors import ProbegenError
 from probegen.evaluate import SphereTestResult, evaluate_sphere_test
 from probegen.evaluate_freeform import (
@@ -122,7 +122,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
     """
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
-    calibration = calibration or spec.machine.calibration
+    calibration = for_stylus(calibration or spec.machine.calibration,
+                             spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
     log = read_dprnt(log_path)
     notes = calibration_notes(log, calibration)
     notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"

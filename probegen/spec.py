@@ -309,12 +309,13 @@ def _machine(t: Table, base: Path) -> MachineProfile:
     cal = t.get_str("calibration")
     if not cal:
         return profile
-    from probegen.compensate import load_calibration
+    from probegen.compensate import for_stylus, load_calibration
 
     try:
         calibration = load_calibration(base / cal)
     except (SpecError, ProbegenError) as exc:
         raise SpecError(f"{t.where('calibration')}: in the probe calibration: {exc}") from None
+    for_stylus(calibration, profile.probe.ball_radius, t.where("calibration"))
     return dataclasses.replace(profile, calibration=calibration)
 
 

@@ -323,3 +323,82 @@ def test_calibrated_program_is_golden(in_repo: Path, tmp_path: Path) -> None:
     spec = spec_with(SAMPLES / "bore_block/bore_block_actions.toml", load_calibration(again))
     text = get_dialect("fanuc").generate(plan_program(spec, runtime_variables=True).program)
     assert_golden(REPO / "tests/golden/bore_block/bore_block_actions.calibrated.nc", text)
+
+
+def test_rotary_identify_takes_the_calibration(
+        tmp: Path, cal: ProbeCalibration, cal_file: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The pivot test (B tilts the probe: the map is looked up in the probe frame) with
+    the lobing probe: with the calibration every location error within 0.5 µm of the
+    truth, and the command says which calibration it used."""
+    from probegen.calibrate.rotary import identify_pivot
+    from probegen.machine.errors_model import ErrorModel, RotaryErrors
+    from probegen.machine.kinematics import Machine, Topology
+    from probegen.planning.rotary import plan_rotary
+    from probegen.planning.rotary_spec import load_rotary_spec
+
+    errors = ErrorModel(b=RotaryErrors(np.array([6.0, 0.0, -8.0]) * UM, np.zeros(3)),
+                        c=RotaryErrors(np.array([-12.0, -4.0, 0.0]) * UM, np.zeros(3)))
+    spec_path = SAMPLES / "rotary/pivot.toml"
+    plan = plan_rotary(load_rotary_spec(spec_path))
+    s = plan.spec
+    vm = VirtualMachine(PlacedPart.from_spheres([s.sphere_centre], [s.sphere_radius]),
+                        probe(), Machine(Topology.FIVE_AXIS_BC, errors, s.pivot_length))
+    res = run_text(get_dialect("fanuc").generate(plan.program), vm, kind="macrob")
+    assert res.alarm is None
+    log = tmp / "pivot.log"
+    log.write_text(res.output)
+    found = identify_pivot(plan, read_dprnt(log), cal)
+    values = dict(zip(found.c.names + found.b.names, found.c.values + found.b.values,
+                      strict=True))
+    for name, want in (("EX0C", -12.0), ("EY0C", -4.0), ("EX0B", 6.0), ("EZ0B", -8.0)):
+        assert values[name] == pytest.approx(want * UM, abs=0.5 * UM), name
+    capsys.readouterr()
+    assert main(["-q", "rotary", "identify", str(log), "--spec", str(spec_path),
+                 "--calibration", str(cal_file)]) == 0
+    assert f"probe: {cal.describe()}" in capsys.readouterr().out
+    assert main(["-q", "rotary", "identify", str(log), "--spec", str(spec_path)]) == 0
+    assert f"probe: {UNCALIBRATED}" in capsys.readouterr().out
+
+
+NIST_SIMPLE = REPO.parent / "shared/ref/nist-ippdme/IPlusSimplePart"
+
+
+@pytest.mark.skipif(not NIST_SIMPLE.exists(), reason="NIST simple part not available")
+def test_post_ingest_takes_the_calibration(tmp: Path, cal: ProbeCalibration) -> None:
+    """NIST's simple part posted for a 4 mm ball, run with the lobing probe: the bore
+    (Ø50, 4 touches) within 1 µm with the calibration, 10 µm large without; a
+    calibration of the 6 mm ball is refused."""
+    ball = 2.0
+    small = dataclasses.replace(  # the same pre-travel map on a 4 mm ball
+        cal, ball_radius=ball, effective_radius=cal.effective_radius - 1.0,
+        radii=tuple(r - 1.0 for r in cal.radii))
+    small_file = tmp / "small.cal.toml"
+    from probegen.compensate import calibration_toml
+
+    small_file.write_text(calibration_toml(small))
+    nc = tmp / "simple.nc"
+    model = NIST_SIMPLE / "STEP_Part21_AP203/ipp_simple.stp"
+    assert main(["-q", "post", str(NIST_SIMPLE / "DMIS/simple_in.dms"), "--machine",
+                 str(SAMPLES / "post/vmc-fanuc-d4.toml"), "--model", str(model),
+                 "-o", str(nc)]) == 0
+    res = run_text(nc.read_text(), VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
+                                                  ProbeModel(ball, LOBING)), kind="macrob")
+    assert res.alarm is None
+    log = tmp / "simple.log"
+    log.write_text(res.output)
+
+    def diameter(*extra: str) -> float:
+        out = tmp / "simple.dmo"
+        assert main(["-q", "post-ingest", str(log), "--features",
+                     str(tmp / "simple.features.json"), "-o", str(out), *extra]) == 0
+        line = out.read_text().splitlines()[5]          # the circle's values
+        return float(line.split(",")[-1])
+
+    assert diameter("--calibration", str(small_file)) == pytest.approx(50.0, abs=UM)
+    assert diameter() - 50.0 > 3 * UM
+    cal6 = tmp / "probe6.cal.toml"
+    cal6.write_text(calibration_toml(cal))
+    assert main(["-q", "post-ingest", str(log), "--features",
+                 str(tmp / "simple.features.json"), "-o", str(tmp / "x.dmo"),
+                 "--calibration", str(cal6)]) != 0

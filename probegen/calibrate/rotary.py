@@ -48,7 +48,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from probegen.compensate import ProbeCalibration, calibrated_centres
+from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.errors import CalibrationError
 from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
 from probegen.geometry.fits_results import Circle3dFit
@@ -154,6 +154,7 @@ def station_points(plan: RotaryPlan, log: DprntLog,
         CalibrationError: a touch is missing (the message names the feature and index).
     """
     found = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
+    for_stylus(calibration, plan.spec.machine.probe.ball_radius, "--calibration")
     out: dict[str, np.ndarray] = {}
     for st in plan.stations:
         missing = [k for k in range(1, len(st.directions) + 1) if (st.feature, k) not in found]

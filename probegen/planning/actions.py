@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from probegen import ir
-from probegen.compensate import calibrated_centres
+from probegen.compensate import calibrated_centres, for_stylus
 from probegen.errors import SpecError
 from probegen.ir_actions import Align, Check, Limit, SetWorkOffset, UpdateTool, point_names, result
 from probegen.machine.profile import MachineProfile
@@ -113,7 +113,7 @@ def calibrated_radius(machine: MachineProfile, normals: Sequence[ir.Vec3]
     normal: the effective radius along each direction the action's touches use,
     computed from the calibration's map at plan time.
     """
-    cal = machine.calibration
+    cal = for_stylus(machine.calibration, machine.probe.ball_radius, machine.source)
     if cal is None:
         return machine.probe.ball_radius, ()
     n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from probegen.compensate import ProbeCalibration, calibrated_centres
+from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.constants import MM_PER_INCH
 from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
@@ -108,6 +108,7 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap,
     scale = MM_PER_INCH if fmap.units == "inch" else 1.0
     points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
               for t in log.latest_touches() if t.kind == "PT"}
+    for_stylus(calibration, fmap.ball_diameter / 2.0, "--calibration")
     replay = _Replay(fmap, points, log.source, calibration)
     result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
     if replay.used != len(fmap.touches):
