@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 import threading
 import time
 import tomllib
@@ -12,6 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, assert_golden
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from mutations import mutate
 
 from probegen.cli import ExitCode, main
 from probegen.compensate import ProbeCalibration, calibration_toml, compensate, load_calibration
@@ -142,3 +147,24 @@ def test_bad_calibration_file(tmp_path: Path) -> None:
                     "directions = [[0.0, 0.0, 2.0]]\nradii = [2.9]\n")
     with pytest.raises(ProbegenError, match=r"calibration.directions: expected an array of"):
         load_calibration(path)
+
+
+CAL_TEXT = (REPO / "tests/data/calibration/probe.cal.toml").read_text()
+
+
+@settings(max_examples=examples(150))
+@given(st.data())
+def test_mutated_calibration_files_load_or_fail_cleanly(data: st.DataObject) -> None:
+    """A calibration file with a few characters changed (the date, a radius, a bracket):
+    a calibration whose map gives finite radii, or a ProbegenError naming the file."""
+    text = data.draw(st.composite(lambda draw: mutate(draw, CAL_TEXT, "0123456789.-,[]=\"T:x "))())
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "cal.toml"
+        path.write_text(text, encoding="utf-8")
+        try:
+            cal = load_calibration(path)
+        except ProbegenError as exc:
+            assert "cal.toml" in str(exc)
+            return
+    assert calibration_toml(cal).startswith("# Probe calibration")
+    assert np.all(np.isfinite(cal.radius([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])))

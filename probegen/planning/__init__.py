@@ -91,7 +91,7 @@ def calibration_header(m: MachineProfile) -> dict[str, Any]:
     source = Path(cal.source).name if cal.source else "UNKNOWN SOURCE"
     lines = (f"PROBE CALIBRATION {cal.fingerprint} DATED {cal.date or 'UNDATED'}",
              f"FROM {source}",
-             f"EFFECTIVE RADIUS {cal.effective_radius:.4f} MM BY DIRECTION IN THE CHECKS")
+             f"MEAN EFFECTIVE RADIUS {cal.effective_radius:.4f} MM")
     return {"calibration": tuple(re.sub(r"[^A-Z0-9 .,:_/+-]", "_", t.upper())[:72]
                                  for t in lines),
             "calibration_id": cal.fingerprint}
