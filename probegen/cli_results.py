@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from probegen.cli_exit import ExitCode
@@ -28,6 +29,10 @@ def _ingest(args: argparse.Namespace) -> int:
         from probegen.ingest import ingest_dmis
 
         result = ingest_dmis(args.log, spec)
+        if cal is not None:  # the CMM compensated its touches with its own probe data
+            result = replace(result, notes=(*result.notes, "--calibration is not applied "
+                                            "to a DMIS output: the CMM compensated its "
+                                            "touches itself"))
     else:
         result = ingest(args.log, spec, calibration=cal, with_path=True)
     js, cs = write_outputs(result, Path(args.output))
