@@ -34,12 +34,17 @@ def _compile(args: argparse.Namespace) -> int:
         target = _target(Path(args.output), Path(args.spec).stem, dialect.EXTENSION, len(names))
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes(text.encode("ascii"))
-        outputs.append((target, planned))
+        outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
+    from probegen.compensate import UNCALIBRATED
+
     cal = spec.machine.calibration
-    for target, planned in outputs:
+    for target, planned, on_control in outputs:
         print(f"wrote {target}")
-        print("  probe: " + ("uncalibrated, nominal ball radius" if cal is None else
-                             cal.describe()))
+        if cal is not None and not on_control:
+            print("  probe: the calibration is not baked in (a CMM compensates with its own "
+                  "probe qualification)")
+        else:
+            print(f"  probe: {UNCALIBRATED if cal is None else cal.describe()}")
         for p in planned.sphere_tests:
             print(f"  {p.feature.id}: {len(p.directions)} points ({p.feature.layout}), "
                   f"largest step {math.degrees(p.alpha):.2f} deg, retract {p.retract:.3f} mm "

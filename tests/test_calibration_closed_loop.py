@@ -271,9 +271,14 @@ def test_pgcal_ties_the_log_to_its_calibration(tmp: Path, cal: ProbeCalibration,
     other = dataclasses.replace(cal, date="2026-11-27")
     assert any(cal.fingerprint in n and other.fingerprint in n
                for n in ingest(log, plain, calibration=other).notes)
-    doc = json.loads(to_json(ingest(log, plain, calibration=cal)))["calibration"]
+    full = json.loads(to_json(ingest(log, plain, calibration=cal)))
+    doc = full["calibration"]
     assert (doc["fingerprint"], doc["date"], doc["source"]) == (
         cal.fingerprint, "2026-11-26", cal.source)
+    from probegen.report.html import render_report
+
+    assert f"probe {cal.describe()}" in render_report(full)
+    assert f"probe {UNCALIBRATED}" in render_report(json.loads(to_json(missing)))
     # the spec's [machine] calibration key does what --calibration does
     keyed = tmp / "keyed.toml"
     text = (SAMPLES / "bore_block/bore_block_actions.toml").read_text()
