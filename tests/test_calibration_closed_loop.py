@@ -406,3 +406,20 @@ def test_post_ingest_takes_the_calibration(tmp: Path, cal: ProbeCalibration) -> 
     assert main(["-q", "post-ingest", str(log), "--features",
                  str(tmp / "simple.features.json"), "-o", str(tmp / "x.dmo"),
                  "--calibration", str(cal6)]) != 0
+
+
+@pytest.mark.parametrize("calibrated", [True, False])
+def test_sphere_setup_work_offset_on_the_control(tmp: Path, cal: ProbeCalibration,
+                                                 models: dict[str, cad.Model],
+                                                 calibrated: bool) -> None:
+    """samples/sphere25/sphere_setup.toml: the control locates the sphere (six touches)
+    and sets G55 XYZ from its centre; the calibration corrects each locating touch."""
+    spec = spec_with(SAMPLES / "sphere25/sphere_setup.toml", cal if calibrated else None)
+    _, res = run(spec, models["sphere"], tmp, f"setup_{calibrated}", work=WORK,
+                 shift=SETUP_SHIFT)
+    g55 = np.array([res.variables[5241 + i] for i in range(3)])
+    error = np.abs(g55 - WORK - SETUP_SHIFT)
+    if calibrated:
+        assert error.max() < UM, error
+    else:
+        assert error[2] > 3 * UM                      # Z: the top touch's pre-travel
