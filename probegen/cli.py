@@ -132,11 +132,14 @@ def _post(args: argparse.Namespace) -> int:
 
 def _post_ingest(args: argparse.Namespace) -> int:
     from probegen.cli_results import verdict_code
+    from probegen.compensate import UNCALIBRATED, load_calibration
     from probegen.post.evaluate import ingest_file, results_table, run_status
 
-    log, result, notes = ingest_file(args.log, args.features, run=args.run,
+    cal = load_calibration(args.calibration) if args.calibration else None
+    log, result, notes = ingest_file(args.log, args.features, cal, run=args.run,
                                      ignore_identity=args.ignore_identity)
     Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
+    print(f"probe: {UNCALIBRATED if cal is None else cal.describe()}")
     sys.stdout.write(results_table(result))
     for note in notes:
         print(f"note: {note}")
@@ -162,6 +165,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="dialect to emit (repeatable; default: the spec's)")
     c.add_argument("-o", "--output", default="out",
                    help="output file, folder, or - for stdout (default: out/)")
+    c.add_argument("--calibration", metavar="FILE",
+                   help="probe calibration (from ingest --write-calibration) baked into "
+                        "the in-process actions; overrides the spec's [machine] calibration")
     c.set_defaults(func=_compile)
 
     f = sub.add_parser("features", help="list the faces of a STEP model")
@@ -195,6 +201,9 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--calibration", help="probe calibration file to compensate with")
     i.add_argument("--write-calibration", metavar="FILE",
                    help="write the probe calibration a sphere test measured")
+    i.add_argument("--calibration-date", metavar="DATE",
+                   help="the date written into --write-calibration (ISO 8601, e.g. "
+                        "2026-11-26; never taken from the clock)")
     i.add_argument("--decision-rule", choices=DECISION_RULES,
                    help="ISO 14253-1 decision rule: simple acceptance or guard_band by U "
                         "(default: the spec's [evaluation] decision_rule, else simple)")
@@ -298,6 +307,8 @@ def _post_parsers(sub: Any) -> None:
                     help="the feature map written by probegen post")
     pi.add_argument("-o", "--output", default="results.dmo",
                     help="the DMIS output file (default results.dmo)")
+    pi.add_argument("--calibration", metavar="FILE",
+                    help="probe calibration (ingest --write-calibration) to compensate with")
     add_log_options(pi)
     pi.set_defaults(func=_post_ingest)
 

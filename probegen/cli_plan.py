@@ -19,7 +19,7 @@ def _compile(args: argparse.Namespace) -> int:
     from probegen.progress import Bar
     from probegen.spec import load_spec
 
-    spec = load_spec(args.spec)
+    spec = with_calibration(load_spec(args.spec), args.calibration)
     names = args.dialect or [spec.dialect]
     outputs = []
     for name in names:
@@ -34,9 +34,17 @@ def _compile(args: argparse.Namespace) -> int:
         target = _target(Path(args.output), Path(args.spec).stem, dialect.EXTENSION, len(names))
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes(text.encode("ascii"))
-        outputs.append((target, planned))
-    for target, planned in outputs:
+        outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
+    from probegen.compensate import UNCALIBRATED
+
+    cal = spec.machine.calibration
+    for target, planned, on_control in outputs:
         print(f"wrote {target}")
+        if cal is not None and not on_control:
+            print("  probe: the calibration is not baked in (a CMM compensates with its own "
+                  "probe qualification)")
+        else:
+            print(f"  probe: {UNCALIBRATED if cal is None else cal.describe()}")
         for p in planned.sphere_tests:
             print(f"  {p.feature.id}: {len(p.directions)} points ({p.feature.layout}), "
                   f"largest step {math.degrees(p.alpha):.2f} deg, retract {p.retract:.3f} mm "
@@ -45,6 +53,19 @@ def _compile(args: argparse.Namespace) -> int:
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
     return ExitCode.OK
+
+
+def with_calibration(spec: Any, path: str | None) -> Any:
+    """``spec`` with the probe calibration of ``--calibration`` (it overrides the spec's
+    ``[machine] calibration``); unchanged without one."""
+    if not path:
+        return spec
+    from dataclasses import replace
+
+    from probegen.compensate import for_stylus, load_calibration
+
+    cal = for_stylus(load_calibration(path), spec.machine.probe.ball_radius, "--calibration")
+    return replace(spec, machine=replace(spec.machine, calibration=cal))
 
 
 def _print_freeform(planned: Any, indent: str) -> None:

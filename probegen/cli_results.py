@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -31,16 +32,22 @@ def add_log_options(p: argparse.ArgumentParser) -> None:
 
 
 def _ingest(args: argparse.Namespace) -> int:
-    from probegen.compensate import calibration_toml, load_calibration
+    from probegen.compensate import calibration_toml, check_date, load_calibration
     from probegen.ingest import ingest, to_table, write_outputs
     from probegen.spec import load_spec
 
     spec = load_spec(args.spec)
     cal = load_calibration(args.calibration) if args.calibration else None
+    date = check_date(args.calibration_date, "--calibration-date") \
+        if args.calibration_date else ""
     if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
         from probegen.ingest import ingest_dmis
 
         result = ingest_dmis(args.log, spec, decision_rule=args.decision_rule)
+        if cal is not None:  # the CMM compensated its touches with its own probe data
+            result = replace(result, notes=(*result.notes, "--calibration is not applied "
+                                            "to a DMIS output: the CMM compensated its "
+                                            "touches itself"))
     else:
         result = ingest(args.log, spec, calibration=cal, with_path=True,
                         decision_rule=args.decision_rule, run=args.run,
@@ -61,9 +68,10 @@ def _ingest(args: argparse.Namespace) -> int:
                                 f"{', '.join(skipped)}")
         refuse_incomplete_calibration(result)
         target = Path(args.write_calibration)
-        target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
-                          encoding="utf-8", newline="\n")
-        print(f"wrote the probe calibration {target}")
+        written = result.results[0].calibration(str(args.log), date)
+        target.write_text(calibration_toml(written), encoding="utf-8", newline="\n")
+        print(f"wrote the probe calibration {target} ({written.fingerprint}"
+              f"{'' if date else ', undated: give --calibration-date'})")
     return verdict_code(result.status)
 
 
@@ -142,9 +150,10 @@ def _qif(args: argparse.Namespace) -> int:
             raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
         spec = load_spec(args.spec)
         cal = load_calibration(args.calibration) if args.calibration else None
-        ing = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
-                     run=args.run, ignore_identity=args.ignore_identity)
-        text, notes = ingested_to_qif(ing, spec=spec), ing.notes
+        ingested = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
+                          run=args.run, ignore_identity=args.ignore_identity)
+        text, notes = ingested_to_qif(ingested, spec=spec), ingested.notes
+        print(f"probe: {ingested.calibration_text}")
     path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
     for note in notes:
         print(f"note: {note}")

@@ -43,6 +43,8 @@ def add_rotary_commands(sub: Any) -> None:
     i.add_argument("--spec", required=True, help="the spec the program was planned from")
     i.add_argument("--compensation", metavar="FILE",
                    help="write the work-offset update as a Fanuc program")
+    i.add_argument("--calibration", metavar="FILE",
+                   help="probe calibration (ingest --write-calibration) to compensate with")
     i.set_defaults(func=_identify)
 
 
@@ -102,21 +104,24 @@ def _sim(args: argparse.Namespace) -> int:
 
 def _identify(args: argparse.Namespace) -> int:
     from probegen.calibrate.rotary import identify_m4, identify_pivot
+    from probegen.compensate import UNCALIBRATED, load_calibration
     from probegen.planning.rotary import plan_rotary
     from probegen.planning.rotary_spec import load_rotary_spec
     from probegen.results.dprnt import read_dprnt
 
     spec = load_rotary_spec(args.spec)
+    cal = load_calibration(args.calibration) if args.calibration else None
     plan = plan_rotary(spec)
     log = read_dprnt(args.log)
     for diag in log.diagnostics:
         print(f"diagnostic: {diag}")
+    print(f"probe: {UNCALIBRATED if cal is None else cal.describe()}")
     if spec.kind == "m4":
-        m4 = identify_m4(plan, log)
+        m4 = identify_m4(plan, log, cal)
         print(m4_table(m4))
         shift = m4.compensation
     else:
-        pivot = identify_pivot(plan, log)
+        pivot = identify_pivot(plan, log, cal)
         print(pivot_table(pivot))
         shift = pivot.compensation
     if args.compensation:

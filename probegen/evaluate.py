@@ -161,12 +161,14 @@ class SphereTestResult:
         directions: (n) nominal approach normals of the points.
         nominal_centre: nominal (or located) centre, mm.
         calibrated_diameter: the sphere's certified diameter, mm.
-        ball_radius: the radius the points were compensated with (nominal), mm.
+        ball_radius: the radius the points were compensated with (the nominal one, or a
+            calibration's mean effective radius), mm.
         p_ftu: probing form error, mm.
         p_stu: probing size error, mm.
         effective_radius: mean effective stylus radius, mm.
         radii: effective radius in each direction, mm.
         characteristics: the checked quantities.
+        nominal_radius: the stylus's nominal ball radius, mm (0: ``ball_radius``).
     """
 
     feature: str
@@ -181,6 +183,7 @@ class SphereTestResult:
     effective_radius: float
     radii: tuple[float, ...]
     characteristics: tuple[Characteristic, ...]
+    nominal_radius: float = 0.0
 
     @property
     def ok(self) -> bool | None:
@@ -188,19 +191,21 @@ class SphereTestResult:
         checks = [c.ok for c in self.characteristics if c.ok is not None]
         return all(checks) if checks else None
 
-    def calibration(self, source: str = "") -> ProbeCalibration:
-        """The probe calibration this test measured (``u_radius``: the standard
-        uncertainty of ``R_EFF``)."""
+    def calibration(self, source: str = "", date: str = "") -> ProbeCalibration:
+        """The probe calibration this test measured (its ``ball_radius`` the nominal;
+        ``u_radius``: the standard uncertainty of ``R_EFF``)."""
         u = next((c.u for c in self.characteristics if c.name == "R_EFF"), None)
-        return ProbeCalibration(self.ball_radius, self.effective_radius, self.directions,
-                                self.radii, source, u or 0.0)
+        return ProbeCalibration(self.nominal_radius or self.ball_radius,
+                                self.effective_radius, self.directions, self.radii, source,
+                                u or 0.0, date)
 
 
 def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,
                          nominal_centre: Vec3, calibrated_diameter: float, ball_radius: float,
                          form: float | None = None, size: float | None = None,
                          position: float | None = None,
-                         budget: Budget | None = None) -> SphereTestResult:
+                         budget: Budget | None = None,
+                         nominal_radius: float | None = None) -> SphereTestResult:
     """Evaluate the sphere test from compensated contact points.
 
     Args:
@@ -215,11 +220,14 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         position: limit of the centre's distance from nominal, or None.
         budget: the stated uncertainty contributions (``budget.radius``: of the radius
             the points were compensated with); default none stated.
+        nominal_radius: the nominal ball radius (default ``ball_radius``), mm: the
+            nominal of ``R_EFF`` and the ``ball_radius`` of the calibration written.
 
     Returns:
         The result with its characteristics.
     """
     p = np.asanyarray(points, dtype=np.float64)
+    r_nom = ball_radius if nominal_radius is None else nominal_radius
     fit = fit_sphere(p)
     r_cal = calibrated_diameter / 2.0
     radial = np.linalg.norm(p - np.asarray(fit.centre), axis=1)
@@ -234,8 +242,8 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
                        None if size is None else -size, size),
         Characteristic("P_FTU", p_ftu, 0.0, p_ftu, None, form),
         Characteristic("P_STU", p_stu, 0.0, p_stu, None if size is None else -size, size),
-        Characteristic("R_EFF", ball_radius + fit.radius - r_cal, ball_radius,
-                       fit.radius - r_cal),
+        Characteristic("R_EFF", ball_radius + fit.radius - r_cal, r_nom,
+                       ball_radius + fit.radius - r_cal - r_nom),
     ]
     from probegen.evaluate_uncertainty import FittedShape, uncertainties
 
@@ -251,7 +259,7 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         ball_radius=ball_radius, p_ftu=p_ftu, p_stu=p_stu,
         effective_radius=ball_radius + fit.radius - r_cal,
         radii=tuple(float(x) for x in ball_radius + radial - r_cal),
-        characteristics=tuple(chars),
+        characteristics=tuple(chars), nominal_radius=r_nom,
     )
 
 

@@ -48,6 +48,17 @@ surface's: the ball centres lie ``r`` off it along the normal).  Each ``D_Sk`` i
 checked against the ``diameter`` tolerance (every local size within the limits),
 ``RON_Sk`` against ``roundness``, ``TAPER`` against ``±taper``, ``ANGLE`` against
 ``angle``.
+
+With a probe calibration (``compensate.ProbeCalibration``: effective radius by direction,
+from the sphere test) the offset surface is fitted with the calibration's mean effective
+radius ``r_ref`` after each ball centre was moved by ``r(n) − r_ref`` along its normal
+``n`` (``compensate.calibrated_centres``, the one function every caller uses).  The
+normals are those of a first fit on the raw centres: they differ from the true surface
+normals by the part's form and misplacement (milliradians), and ``r(n)`` changes by at
+most its lobing amplitude (a few µm) per radian, so the error of the correction is
+nanometres; the second fit is the result (no further iteration changes it measurably).
+The planned normals would do as well for a part near nominal, but the fitted ones stay
+right for a part placed or tilted far off, and need nothing but the touches.
 """
 
 from __future__ import annotations
@@ -59,6 +70,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from probegen.compensate import ProbeCalibration, calibrated_centres
 from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
 from probegen.evaluate_uncertainty import FittedShape, uncertainties
@@ -179,7 +191,7 @@ class _Fit:
 
 
 def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
-                      sections: ArrayLike, *, ball_radius: float,
+                      sections: ArrayLike, *, ball_radius: float | ProbeCalibration,
                       limits: Limits, budget: Budget | None = None) -> RevolvedResult:
     """Fit and evaluate one revolved feature from its ball centres.
 
@@ -188,7 +200,8 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         nominal: the nominal feature.
         ball_centres: (n, 3) skip positions (ball centres), mm.
         sections: (n,) 0-based section of each touch (into ``nominal.sections``).
-        ball_radius: the stylus ball radius to offset by, mm.
+        ball_radius: the stylus ball radius to offset by, mm, or the probe calibration
+            (see the module doc).
         limits: the feature's tolerances.
         budget: the stated uncertainty contributions (default: none stated); every
             characteristic gets its ``u`` (``probegen.evaluate_uncertainty``).
@@ -205,6 +218,10 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
                             f"{MIN_SECTIONS[nominal.kind]} sections, found {found}")
     v0 = np.asarray(nominal.axis, dtype=np.float64)
     sign = 1.0 if nominal.ball_inside else -1.0  # surface size = ball size + sign·r
+    if isinstance(ball_radius, ProbeCalibration):
+        cal, ball_radius = ball_radius, ball_radius.effective_radius
+        first = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
+        c = calibrated_centres(c, -sign * first.normals, cal, ball_radius)
     fit = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
     off = fit.centre - np.asarray(nominal.centre if nominal.kind != "cone" else
                                   nominal.sections[0][0])

@@ -99,8 +99,10 @@ def _mm(v: float) -> str:
 
 def canonical(value: Any) -> str:
     """A repeatable text of an IR value (see the module docstring): dataclasses field by
-    field, floats to 4 decimals, enums by value, ``Comment`` nodes and the setup's
-    ``identity`` left out."""
+    field, floats to 4 decimals, enums by value, ``Comment`` nodes and the fields of
+    ``_LEFT_OUT`` left out, and so is every field at its default value (a release that
+    adds an optional IR field keeps the identity of every program that does not use it,
+    so the logs of those programs still read)."""
     if isinstance(value, ir.Comment):
         return ""
     if isinstance(value, bool | int | str) or value is None:
@@ -114,9 +116,27 @@ def canonical(value: Any) -> str:
     if dataclasses.is_dataclass(value):
         fields = [f"{f.name}={canonical(getattr(value, f.name))}"
                   for f in dataclasses.fields(value)
-                  if not (isinstance(value, ir.Setup) and f.name == "identity")]
+                  if (type(value).__name__, f.name) not in _LEFT_OUT
+                  and not _at_default(f, getattr(value, f.name))]
         return f"{type(value).__name__}({','.join(fields)})"
     return repr(value)
+
+
+_LEFT_OUT = {("Setup", "identity"), ("Setup", "calibration"), ("Setup", "calibration_id"),
+             ("Check", "corrections"), ("Check", "ball_radius")}
+"""Fields the identity leaves out: the identity itself, and the probe calibration a program
+was compiled with and the radius it gives the on-control fits (its own ``PGCAL`` line ties
+the log to it, and ingest warns when it differs: a recalibrated program measures the same
+touches)."""
+
+
+def _at_default(field: dataclasses.Field[Any], value: Any) -> bool:
+    """Whether ``value`` is the field's declared default."""
+    if field.default is not dataclasses.MISSING:
+        return bool(value == field.default)
+    if field.default_factory is not dataclasses.MISSING:
+        return bool(value == field.default_factory())
+    return False
 
 
 def identity_of(content: str) -> str:

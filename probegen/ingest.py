@@ -18,6 +18,7 @@ once, the last one read; the same point twice within one run is refused.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -28,7 +29,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from probegen.compensate import ProbeCalibration, compensate
+from probegen.compensate import ProbeCalibration, calibration_state, compensate, for_stylus
 from probegen.errors import ProbegenError
 from probegen.evaluate import (
     NOT_EVALUATED,
@@ -95,6 +96,8 @@ class Ingested:
             (``NOT EVALUATED``).
         rule: the ISO 14253-1 decision rule of the verdicts (``simple``, ``guard_band``).
         budget: the stated uncertainty contributions the characteristics' ``u`` used.
+        calibration: the probe calibration the results were compensated with, or None
+            (the nominal ball radius).
     """
 
     source: str
@@ -109,6 +112,7 @@ class Ingested:
     not_evaluated: tuple[NotEvaluated, ...] = ()
     rule: str = "simple"
     budget: Budget = Budget()
+    calibration: ProbeCalibration | None = None
 
     @property
     def evaluated(self) -> tuple[Evaluated, ...]:
@@ -143,6 +147,33 @@ class Ingested:
         """No evaluated feature fails its verdict under ``rule``."""
         return not any(accepted(r.characteristics, self.rule) is False
                        for r in self.evaluated)
+
+    @property
+    def calibration_text(self) -> str:
+        """What every output says about the calibration used."""
+        return str(calibration_state(self.calibration)["state"])
+
+
+def calibration_notes(log: DprntLog, calibration: ProbeCalibration | None) -> list[str]:
+    """Warnings when the log's ``PGCAL`` (the calibration its program was compiled with)
+    is not the calibration the results use."""
+    marks = sorted({m.fingerprint for m in log.calibrations})
+    if not marks:
+        if calibration is None:
+            return []
+        return [f"the program was compiled without a probe calibration (no PGCAL line): "
+                f"the values it computed on the control used the nominal ball radius, "
+                f"the results use calibration {calibration.fingerprint}"]
+    if calibration is None:
+        return [f"the program was compiled with probe calibration {', '.join(marks)} "
+                f"(PGCAL) but none was given (--calibration): the results use the "
+                f"nominal ball radius"]
+    other = [m for m in marks if m != calibration.fingerprint]
+    if other:
+        return [f"the program was compiled with probe calibration {', '.join(other)} "
+                f"(PGCAL), the results use {calibration.fingerprint} "
+                f"({calibration.source or 'unknown source'})"]
+    return []
 
 
 def budget_of(spec: Spec, calibration: ProbeCalibration | None) -> Budget:
@@ -200,7 +231,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
     too far from their planned move); ``run`` (1-based) and ``ignore_identity`` are
     passed to it.  ``with_path`` also runs the collision check of the whole program
     again to record the nominal stylus path for the report.  ``decision_rule``
-    overrides the spec's ``[evaluation] decision_rule``.
+    overrides the spec's ``[evaluation] decision_rule``.  ``calibration`` defaults to
+    the spec's ``[machine] calibration``.
 
     Raises:
         ProbegenError: the log cannot be read, belongs to another program, names points
@@ -210,6 +242,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
     from probegen.planning import plan_program
     from probegen.planning.identity import planned_touches
 
+    calibration = for_stylus(calibration or spec.machine.calibration,
+                             spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
     planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
     raw = read_dprnt(log_path)
     checked = check_log(raw, program=spec.program_number,
@@ -218,7 +252,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
                         run=run, ignore_identity=ignore_identity,
                         lines=log_lines(Path(log_path).read_bytes()))
     log = checked.log
-    notes = list(checked.notes)
+    notes = list(checked.notes) + calibration_notes(log, calibration)
     notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
               for e in log.errors]
     if not log.complete:
@@ -234,7 +268,8 @@ def ingest(log_path: str | Path, spec: Spec, *,
     outcomes: list[Outcome] = []
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            outcomes.append(_revolved(feature, spec, touches, notes, gaps, budget))
+            outcomes.append(_revolved(feature, spec, touches, notes, gaps, budget,
+                                     calibration))
         elif isinstance(feature, FreeformSpec):
             outcomes.append(ingest_freeform(feature, spec, touches, notes, calibration,
                                             gaps))
@@ -246,9 +281,10 @@ def ingest(log_path: str | Path, spec: Spec, *,
     path = tuple((s.feature, s.kind, s.start, s.end)
                  for s in planned.clearance.segments) if with_path else ()
     return Ingested(str(log_path), log, _only(outcomes, SphereTestResult), tuple(notes),
-                    path, _only(outcomes, RevolvedResult), decisions(spec, log),
+                    path, _only(outcomes, RevolvedResult), decisions(spec, log, calibration),
                     _only(outcomes, FreeformResult), _only(outcomes, PlanarResult),
-                    _only(outcomes, NotEvaluated), decision_rule or spec.decision_rule, budget)
+                    _only(outcomes, NotEvaluated), decision_rule or spec.decision_rule, budget,
+                    calibration)
 
 
 T = TypeVar("T")
@@ -313,11 +349,14 @@ def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[
     def evaluate() -> SphereTestResult:
         centres = np.array([touches[(feature.id, k)] for k in found])
         normals = np.array([plan.directions[k - 1] for k in found])
-        r = spec.machine.probe.ball_radius if calibration is None else calibration
+        # One radius, not the map: the sphere test measures the map (P_FTU, the radii
+        # by direction); compensating it with the map would hide what it measures.
+        r = spec.machine.probe.ball_radius if calibration is None else \
+            calibration.effective_radius
         return evaluate_sphere_test(
             feature.id, compensate(centres, normals, r), normals,
             nominal_centre=sphere.centre, calibrated_diameter=sphere.diameter,
-            ball_radius=r if isinstance(r, float) else r.effective_radius,
+            ball_radius=r, nominal_radius=spec.machine.probe.ball_radius,
             form=tol.form, size=tol.size, position=tol.position, budget=budget)
 
     if len(found) < MIN_POINTS:
@@ -333,7 +372,8 @@ def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
     from probegen.planning.actions import planar_fit
     from probegen.planning.planar import plan_planar
 
-    check = planar_fit(plan_planar(feature, spec.model, spec.machine), spec.machine)
+    machine = dataclasses.replace(spec.machine, calibration=calibration)
+    check = planar_fit(plan_planar(feature, spec.model, machine), machine)
     tol = feature.tolerance
     names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)))
     planned = range(1, len(feature.contacts) + 1)
@@ -432,7 +472,8 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Outcome,
 
 
 def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[str],
-              gaps: _Gaps, budget: Budget) -> Outcome:
+              gaps: _Gaps, budget: Budget, calibration: ProbeCalibration | None = None
+              ) -> Outcome:
     """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
     without contact, too few to fit, or a failed fit)."""
     from probegen.planning.revolved_spec import plan_revolved
@@ -455,8 +496,8 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[s
         return _judge(feature.id, feature.kind, reason, names, None)
     outcome = _judge(feature.id, feature.kind, reason, names, lambda: evaluate_revolved(
         feature.id, nominal, [touches[(feature.id, k)] for k in found], which,
-        ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance,
-        budget=budget))
+        ball_radius=spec.machine.probe.ball_radius if calibration is None else calibration,
+        limits=feature.tolerance, budget=budget))
     if isinstance(outcome, NotEvaluated) and outcome.partial is None:
         notes.append(f"feature {feature.id}: not evaluated: {outcome.reason}")
     return outcome
@@ -510,6 +551,7 @@ def to_json(ing: Ingested) -> str:
         "program": ing.log.program,
         "complete": ing.log.complete,
         "status": ing.status,
+        "calibration": calibration_state(ing.calibration),
         "notes": list(ing.notes),
         "uncertainty": uncertainty_json(ing.budget, ing.rule, ing.uncertainty_notes),
         "diagnostics": [str(d) for d in ing.log.diagnostics],
@@ -721,12 +763,13 @@ def to_csv(ing: Ingested) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
-                "upper", "status", "u", "U", "decision"])
+                "upper", "status", "u", "U", "decision", "calibration"])
     for feature, (name, measured, nominal, deviation, lo, hi, status, u, big_u,
                   decision) in _all_rows(ing):
         w.writerow([feature, name, _num(measured, ".4f"), _num(nominal, ".4f"),
                     _num(deviation, ".4f"), _num(lo, ".4f"), _num(hi, ".4f"), status,
-                    _num(u, ".5f"), _num(big_u, ".4f"), decision or ""])
+                    _num(u, ".5f"), _num(big_u, ".4f"), decision or "",
+                    ing.calibration_text])
     return buf.getvalue()
 
 
@@ -740,7 +783,7 @@ def to_table(ing: Ingested) -> str:
         rows.append((feature, name, _num(measured, ".4f") or "-", _num(nominal, ".4f") or "-",
                      _num(deviation, "+.4f") or "-", _tol(lo, hi), status,
                      _num(big_u, ".4f") or "-", decision or "-"))
-    text = _columns(rows)
+    text = f"probe: {ing.calibration_text}\n" + _columns(rows)
     text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
              f"{ing.rule} (ISO 14253-1)\n")
     text += "".join(f"{note}\n" for note in ing.uncertainty_notes)

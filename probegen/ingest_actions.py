@@ -12,11 +12,13 @@ each other: a wrong sign or formula in either shows as a disagreement.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from probegen.compensate import ProbeCalibration
 from probegen.errors import ProbegenError
 from probegen.geometry.fits import fit_line_2d
 from probegen.geometry.fits_initial import algebraic_circle
@@ -72,6 +74,8 @@ def evaluate_check(check: Check, balls: dict[int, Vec3]) -> dict[str, float]:
         raise ProbegenError(f"feature {check.feature}: no touch for points "
                             f"{', '.join(map(str, missing))}")
     pts = np.array([balls[point_index(n)] for n in names], dtype=np.float64)
+    if check.corrections:  # the calibration, as the program applies it
+        pts = pts + np.asarray(check.corrections, dtype=np.float64)
     out = _circle(check, pts) if check.fit == "circle" else _planar(check, pts)
     out["NG"] = float(any(_exceeds(check, out, lim) for lim in check.limits))
     return out
@@ -135,8 +139,10 @@ def tool_correction(tool: ToolAction, excess: float) -> float:
     return 0.0 if abs(c) < tool.dead_band else c
 
 
-def decisions(spec: Spec, log: DprntLog) -> tuple[Decision, ...]:
-    """Every decision value of ``spec``'s features with actions: offline and printed."""
+def decisions(spec: Spec, log: DprntLog,
+              calibration: ProbeCalibration | None = None) -> tuple[Decision, ...]:
+    """Every decision value of ``spec``'s features with actions: offline and printed
+    (offline with ``calibration`` as a program compiled with it computes them)."""
     from probegen.planning.actions import planar_check, revolved_check
     from probegen.planning.planar import plan_planar
     from probegen.planning.revolved_spec import plan_revolved, revolved_nodes
@@ -149,7 +155,7 @@ def decisions(spec: Spec, log: DprntLog) -> tuple[Decision, ...]:
     for r in log.results:
         printed.setdefault(r.feature, {}).update(r.values)
     out: list[Decision] = []
-    m = spec.machine
+    m = dataclasses.replace(spec.machine, calibration=calibration)
     for f in spec.features:
         if not isinstance(f, RevolvedSpec | PlanarSpec) or not f.actions.any:
             continue

@@ -81,6 +81,9 @@ class Setup:
         identity: the program identity printed on the ``PGSTART`` line (``H`` and 8 hex
             digits, :mod:`probegen.planning.identity`); empty for programs that print none
             (rotary, grating and posted programs).
+        calibration: the probe calibration's header comment lines (upper case, no
+            parentheses) when the program was compiled with one, else empty.
+        calibration_id: its fingerprint (printed in the ``PGCAL`` line), or "".
     """
 
     program_number: int
@@ -100,6 +103,8 @@ class Setup:
     reset_codes: tuple[str, ...]
     probe_length: float
     identity: str = ""
+    calibration: tuple[str, ...] = ()
+    calibration_id: str = ""
 
 
 @dataclass(frozen=True, slots=True)

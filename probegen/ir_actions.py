@@ -77,6 +77,9 @@ class Check:
         limits: the tolerances to check.
         on_fail: ``alarm``, ``stop``, ``continue`` or ``flag``.
         flag: the variable set to NG with ``flag``.
+        corrections: per point, the vector added to its stored ball centre before the
+            fit (a probe calibration's ``r(n) − ball_radius`` along the touch's
+            nominal normal, ``compensate.calibrated_centres``), mm; empty: none.
     """
 
     feature: str
@@ -91,6 +94,7 @@ class Check:
     limits: tuple[Limit, ...]
     on_fail: str
     flag: int | None = None
+    corrections: tuple[Vec3, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -10,6 +10,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     profile = "../machines/vmc-fanuc.toml"   # relative to this file
     dialect = "fanuc"              # optional: overrides the profile's dialect
     clearance_z = 120.0            # optional: overrides the profile's clearance plane
+    calibration = "probe.cal.toml" # optional: the probe calibration the in-process
+                                   # actions are compiled with (relative to this file)
 
     [program]
     number = 1001                  # O-number (Fanuc) / program id
@@ -58,13 +60,14 @@ Every problem is a ``SpecError`` naming the file, the key path and the value fou
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from probegen.constants import MM_PER_INCH
-from probegen.errors import SpecError, did_you_mean
+from probegen.errors import ProbegenError, SpecError, did_you_mean
 from probegen.machine.profile import MachineProfile, load_profile
 from probegen.spec_actions import PLANAR_KINDS, Actions, PlanarSpec, read_actions, read_planar
 from probegen.tomlread import Table, load_toml
@@ -314,9 +317,20 @@ def _decision_rule(t: Table) -> str:
 def _machine(t: Table, base: Path) -> MachineProfile:
     name = t.get_str("profile", required=True) or ""
     try:
-        return load_profile(base / name)
+        profile = load_profile(base / name)
     except SpecError as exc:
         raise SpecError(f"{t.where('profile')}: in the machine profile: {exc}") from None
+    cal = t.get_str("calibration")
+    if not cal:
+        return profile
+    from probegen.compensate import for_stylus, load_calibration
+
+    try:
+        calibration = load_calibration(base / cal)
+    except (SpecError, ProbegenError) as exc:
+        raise SpecError(f"{t.where('calibration')}: in the probe calibration: {exc}") from None
+    for_stylus(calibration, profile.probe.ball_radius, t.where("calibration"))
+    return dataclasses.replace(profile, calibration=calibration)
 
 
 def _clearance(t: Table, machine: MachineProfile, k: float) -> float:

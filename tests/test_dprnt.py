@@ -209,9 +209,9 @@ MALFORMED = [
     (
         "PTX SPH1 1 X1 Y2 Z3",
         1,
-        "expected a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
+        "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
     ),
-    ("%PX 1", 2, "expected a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
+    ("%PX 1", 2, "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
     ("ERR NOTUCH SPH1 1", 5,
      "expected an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT), found 'NOTUCH'"),
     ("ERR NOTOUCH SPH1", 17, "expected an index, found end of line"),
@@ -434,3 +434,12 @@ def test_header_after_headless_records_is_a_restart() -> None:
     assert log.restarts == 1 and log.complete
     assert [(t.run, t.xyz[0]) for t in log.touches] == [(0, 1.0), (1, 2.0)]
     assert [t.xyz[0] for t in log.latest_touches()] == [2.0]
+
+
+def test_pgcal_names_the_programs_calibration() -> None:
+    log = parse_dprnt("PGSTART O1003 V1\nPGCAL C61E692BB\nPT B 1 X1. Y2. Z3.\nPGEND O1003\n")
+    assert [(m.fingerprint, m.line) for m in log.calibrations] == [("C61E692BB", 2)]
+    assert not log.diagnostics
+    bad = parse_dprnt("PGSTART O1003 V1\nPGCAL\nPGEND O1003\n")
+    assert bad.calibrations == () and len(bad.diagnostics) == 1
+    assert bad.diagnostics[0].line == 2

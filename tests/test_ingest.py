@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 import threading
 import time
 import tomllib
@@ -12,6 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, assert_golden
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from mutations import mutate
 
 from probegen.cli import ExitCode, main
 from probegen.compensate import ProbeCalibration, calibration_toml, compensate, load_calibration
@@ -55,9 +60,13 @@ def test_cli_ingest_writes_files_and_calibration(in_repo: Path, tmp_path: Path,
     loaded = load_calibration(cal)
     assert len(loaded.directions) == 25
     assert loaded.effective_radius == pytest.approx(TRUTH["effective_radius"], abs=3e-5)
-    # compensating the same touches with the measured map leaves no form error
+    assert "probe: uncalibrated, nominal ball radius" in out
+    # re-evaluated with its own calibration the test still shows the probe's lobing
+    # (the map is what it measures, not what it compensates) and gives the same map
     result = ingest(LOG, load_spec(SPEC), calibration=loaded)
-    assert result.results[0].p_ftu < 1e-6
+    assert result.results[0].p_ftu == pytest.approx(0.0016, abs=1e-4)
+    again = result.results[0].calibration(str(LOG))
+    assert np.allclose(again.radii, loaded.radii, atol=1e-7)
 
 
 def test_out_of_tolerance_sets_the_exit_code(in_repo: Path, tmp_path: Path) -> None:
@@ -149,3 +158,24 @@ def test_bad_calibration_file(tmp_path: Path) -> None:
                     "directions = [[0.0, 0.0, 2.0]]\nradii = [2.9]\n")
     with pytest.raises(ProbegenError, match=r"calibration.directions: expected an array of"):
         load_calibration(path)
+
+
+CAL_TEXT = (REPO / "tests/data/calibration/probe.cal.toml").read_text()
+
+
+@settings(max_examples=examples(150))
+@given(st.data())
+def test_mutated_calibration_files_load_or_fail_cleanly(data: st.DataObject) -> None:
+    """A calibration file with a few characters changed (the date, a radius, a bracket):
+    a calibration whose map gives finite radii, or a ProbegenError naming the file."""
+    text = data.draw(st.composite(lambda draw: mutate(draw, CAL_TEXT, "0123456789.-,[]=\"T:x "))())
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "cal.toml"
+        path.write_text(text, encoding="utf-8")
+        try:
+            cal = load_calibration(path)
+        except ProbegenError as exc:
+            assert "cal.toml" in str(exc)
+            return
+    assert calibration_toml(cal).startswith("# Probe calibration")
+    assert np.all(np.isfinite(cal.radius([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])))

@@ -48,10 +48,12 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.errors import CalibrationError
 from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
 from probegen.geometry.fits_results import Circle3dFit
 from probegen.machine.kinematics import head_shift
+from probegen.machine.probe_model import tilted_probe_frame
 from probegen.planning.rotary import RotaryPlan, Station
 from probegen.results.dprnt import DprntLog
 from probegen.uncertainty import t_factor
@@ -154,13 +156,20 @@ class PivotResult:
 # ---------------------------------------------------------------------------- log
 
 
-def station_points(plan: RotaryPlan, log: DprntLog) -> dict[str, np.ndarray]:
+def station_points(plan: RotaryPlan, log: DprntLog,
+                   calibration: ProbeCalibration | None = None) -> dict[str, np.ndarray]:
     """The ball centres of every station's touches, in index order: ``(n, 3)`` mm.
+
+    With a probe calibration each centre is moved by ``r(n) − r_ref`` along its
+    normal (``compensate.calibrated_centres``; the map looked up in the probe frame
+    of the station's head tilt), so one radius, ``r_ref`` = the calibration's mean
+    effective radius, compensates them all.
 
     Raises:
         CalibrationError: a touch is missing (the message names the feature and index).
     """
     found = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
+    for_stylus(calibration, plan.spec.machine.probe.ball_radius, "--calibration")
     out: dict[str, np.ndarray] = {}
     for st in plan.stations:
         missing = [k for k in range(1, len(st.directions) + 1) if (st.feature, k) not in found]
@@ -170,6 +179,10 @@ def station_points(plan: RotaryPlan, log: DprntLog) -> dict[str, np.ndarray]:
                 f"missing {', '.join(str(k) for k in missing)} (did the program finish?)")
         shift = np.array(head_shift(st.b, plan.spec.pivot_length))
         xyz = np.array([found[(st.feature, k)] for k in range(1, len(st.directions) + 1)])
+        if calibration is not None:
+            xyz = calibrated_centres(xyz, st.directions, calibration,
+                                     calibration.effective_radius,
+                                     probe_normals=tilted_probe_frame(st.directions, st.b))
         out[st.feature] = xyz + shift
     return out
 
@@ -177,12 +190,15 @@ def station_points(plan: RotaryPlan, log: DprntLog) -> dict[str, np.ndarray]:
 # -------------------------------------------------------------------------- the seed
 
 
-def identify_m4(plan: RotaryPlan, log: DprntLog) -> M4Result:
-    """Solve the seed's equations (module docstring) from an ``m4`` test's log."""
-    pts = station_points(plan, log)
+def identify_m4(plan: RotaryPlan, log: DprntLog,
+                calibration: ProbeCalibration | None = None) -> M4Result:
+    """Solve the seed's equations (module docstring) from an ``m4`` test's log (with
+    the probe calibration's radii, see :func:`station_points`)."""
+    pts = station_points(plan, log, calibration)
     spec = plan.spec
     circle = fit_circle_2d(pts["RAD"][:, :2])
-    ball = spec.machine.probe.ball_radius
+    ball = spec.machine.probe.ball_radius if calibration is None else \
+        calibration.effective_radius
     r1 = r2 = circle.radius - ball
     x1s, x2s = pts["BP90"][:, 0], pts["BM90"][:, 0]
     # the touch X less the shift back to the pivot's X: the axis' own reading
@@ -318,9 +334,11 @@ def _centres(plan: RotaryPlan, pts: dict[str, np.ndarray], prefix: str
     return stations, _sphere_centres([pts[s.feature] for s in stations])
 
 
-def identify_pivot(plan: RotaryPlan, log: DprntLog) -> PivotResult:
-    """The location errors of C and B from a ``pivot`` test's log (module docstring)."""
-    pts = station_points(plan, log)
+def identify_pivot(plan: RotaryPlan, log: DprntLog,
+                   calibration: ProbeCalibration | None = None) -> PivotResult:
+    """The location errors of C and B from a ``pivot`` test's log (module docstring;
+    with the probe calibration's radii, see :func:`station_points`)."""
+    pts = station_points(plan, log, calibration)
     length = plan.spec.pivot_length
     cs, c_data = _centres(plan, pts, "C")
     c_angles = np.array([s.c for s in cs])

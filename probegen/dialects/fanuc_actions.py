@@ -79,6 +79,7 @@ class _Checker:
 
     def lines(self) -> list[str]:
         n = self.node
+        self.calibrate()
         if n.fit == "circle":
             self.circle()
         else:
@@ -87,6 +88,19 @@ class _Checker:
         self.report()
         self.react()
         return self.out
+
+    def calibrate(self) -> None:
+        """Move each stored ball centre by its calibration correction (none without a
+        calibration, or where it prints as 0)."""
+        lines = []
+        for k, vector in enumerate(self.node.corrections):
+            for a in range(3):
+                name = self.node.points[k][a]
+                step = minus(self.d, -vector[a])
+                if name is not None and step:
+                    lines.append(f"{self.d.var(name)}={self.d.var(name)}{step}")
+        if lines:
+            self.emit("(PROBE CALIBRATION: EFFECTIVE RADIUS BY DIRECTION)", *lines)
 
     def means(self, axes: tuple[int, ...]) -> None:
         count = len(self.node.points)

@@ -41,6 +41,16 @@ Pretravel = Callable[[FloatArray], ArrayLike]
 """A pre-travel function: unit directions (n, 3) in the probe frame to mm (n,)."""
 
 
+def tilted_probe_frame(directions: ArrayLike, b_degrees: float) -> FloatArray:
+    """Machine-frame directions (n, 3) or (3,) in the probe frame of a head tilted by
+    ``b_degrees`` about Y (its stylus axis turns with B)."""
+    d = np.asanyarray(directions, dtype=np.float64)
+    b = math.radians(b_degrees)
+    c, s = math.cos(b), math.sin(b)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    return np.asarray(np.stack([c * x - s * z, y, s * x + c * z], axis=-1))
+
+
 @dataclass(frozen=True, slots=True)
 class Lobing:
     """The 3-lobe pre-travel model of the module docstring.

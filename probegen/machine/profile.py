@@ -9,9 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from probegen.constants import MM_PER_INCH
 from probegen.tomlread import Table, load_toml
+
+if TYPE_CHECKING:
+    from probegen.compensate import ProbeCalibration
 
 WORK_OFFSETS = ("G54", "G55", "G56", "G57", "G58", "G59")
 
@@ -107,6 +111,9 @@ class MachineProfile:
     controller: Controller
     source: str
     uncertainty: StatedUncertainty = StatedUncertainty()
+    calibration: ProbeCalibration | None = None
+    """The probe calibration the in-process actions are compiled with (the spec's
+    ``[machine] calibration`` or ``compile --calibration``), or None: nominal radius."""
 
 
 def load_profile(path: str | Path) -> MachineProfile:

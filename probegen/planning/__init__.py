@@ -7,8 +7,11 @@ a plain flag so that planning never imports the dialects.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
 
 from probegen import ir
 from probegen.machine.profile import MachineProfile
@@ -76,7 +79,23 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         probe_on=m.controller.probe_on, probe_off=m.controller.probe_off,
         variable_base=m.controller.variable_base, reset_codes=m.controller.reset_codes,
         probe_length=m.probe.length,
+        **calibration_header(m),
     )
+
+
+def calibration_header(m: MachineProfile) -> dict[str, Any]:
+    """The setup's ``calibration`` comment lines and ``calibration_id`` (empty without
+    a calibration): fingerprint, date, source file name and mean effective radius."""
+    cal = m.calibration
+    if cal is None:
+        return {}
+    source = Path(cal.source).name if cal.source else "UNKNOWN SOURCE"
+    lines = (f"PROBE CALIBRATION {cal.fingerprint} DATED {cal.date or 'UNDATED'}",
+             f"FROM {source}",
+             f"MEAN EFFECTIVE RADIUS {cal.effective_radius:.4f} MM")
+    return {"calibration": tuple(re.sub(r"[^A-Z0-9 .,:_/+-]", "_", t.upper())[:72]
+                                 for t in lines),
+            "calibration_id": cal.fingerprint}
 
 
 def plan_program(spec: Spec, *, runtime_variables: bool,

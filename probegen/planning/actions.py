@@ -14,7 +14,10 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 
+import numpy as np
+
 from probegen import ir
+from probegen.compensate import calibrated_centres, for_stylus
 from probegen.errors import SpecError
 from probegen.ir_actions import Align, Check, Limit, SetWorkOffset, UpdateTool, point_names, result
 from probegen.machine.profile import MachineProfile
@@ -54,7 +57,7 @@ def revolved_check(nodes: tuple[ir.Node, ...], feature: RevolvedSpec,
         raise SpecError(f"{feature.where}.update_tool.offset: expected \"radius\" for a "
                         f"{feature.kind} (its size corrects the radius), found "
                         f"{feature.actions.tool.offset!r}")
-    nodes, points = _with_stores(nodes, feature.id, "XY")
+    nodes, points, normals = _with_stores(nodes, feature.id, "XY")
     t = feature.tolerance
     limits = []
     if t.diameter is not None:
@@ -63,9 +66,10 @@ def revolved_check(nodes: tuple[ir.Node, ...], feature: RevolvedSpec,
         limits.append(Limit("position", 0.0, t.position))
     if t.form is not None:
         limits.append(Limit("form", 0.0, t.form))
+    radius, corrections = calibrated_radius(machine, normals)
     check = Check(feature.id, "circle", points, definition.centre, definition.axis,
-                  definition.diameter, definition.inner, machine.probe.ball_radius, 0.0,
-                  tuple(limits), feature.actions.on_fail, feature.actions.flag)
+                  definition.diameter, definition.inner, radius, 0.0,
+                  tuple(limits), feature.actions.on_fail, feature.actions.flag, corrections)
     return (*nodes, check)
 
 
@@ -99,18 +103,41 @@ def planar_fit(p: PlanarPlan, machine: MachineProfile, axes: str = "XYZ") -> Che
     d = p.definition
     direction = direction_degrees(d) if isinstance(d, ir.LineDef) else 0.0
     nominal = d.start if isinstance(d, ir.LineDef) else d.point
+    radius, corrections = calibrated_radius(machine, [p.normal] * len(points))
     return Check(feature.id, feature.kind, points, nominal, p.normal, 0.0, False,
-                 machine.probe.ball_radius, direction, tuple(limits),
-                 feature.actions.on_fail, feature.actions.flag)
+                 radius, direction, tuple(limits),
+                 feature.actions.on_fail, feature.actions.flag, corrections)
+
+
+def calibrated_radius(machine: MachineProfile, normals: Sequence[ir.Vec3]
+                      ) -> tuple[float, tuple[ir.Vec3, ...]]:
+    """The radius a ``Check`` offsets by and its per-point corrections.
+
+    Without a calibration: the nominal ball radius, no corrections.  With one (the
+    machine's ``calibration``): its mean effective radius ``r_ref`` and, for each touch,
+    ``(r(n) − r_ref)·n`` subtracted from its ball centre (``calibrated_centres``, the
+    same function the offline evaluation uses), ``n`` the touch's nominal outward
+    normal: the effective radius along each direction the action's touches use,
+    computed from the calibration's map at plan time.
+    """
+    cal = for_stylus(machine.calibration, machine.probe.ball_radius, machine.source)
+    if cal is None:
+        return machine.probe.ball_radius, ()
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    moved = calibrated_centres(np.zeros_like(n), n, cal, cal.effective_radius)
+    return cal.effective_radius, tuple((float(x) + 0.0, float(y) + 0.0, float(z) + 0.0)
+                                       for x, y, z in moved)
 
 
 Store = tuple[str | None, str | None, str | None]
 
 
 def _with_stores(nodes: tuple[ir.Node, ...], fid: str, axes: str
-                 ) -> tuple[tuple[ir.Node, ...], tuple[Store, ...]]:
-    """Give every measuring touch of ``fid`` stores; return the nodes and the names."""
+                 ) -> tuple[tuple[ir.Node, ...], tuple[Store, ...], tuple[ir.Vec3, ...]]:
+    """Give every measuring touch of ``fid`` stores; return the nodes, the names and
+    the touches' nominal outward normals."""
     names: list[Store] = []
+    normals: list[ir.Vec3] = []
 
     def visit(node: ir.Node) -> ir.Node:
         if isinstance(node, ir.FeatureBlock):
@@ -118,11 +145,12 @@ def _with_stores(nodes: tuple[ir.Node, ...], fid: str, axes: str
         if isinstance(node, ir.Touch) and node.feature == fid:
             store = point_names(fid, node.index, axes)
             names.append(store)
+            normals.append(node.normal)
             return dataclasses.replace(node, store=store)
         return node
 
     out = tuple(visit(n) for n in nodes)
-    return out, tuple(names)
+    return out, tuple(names), tuple(normals)
 
 
 def sphere_offset(feature: SphereTest, centre: ir.Vec3, running: str) -> SetWorkOffset | None:

@@ -9,6 +9,13 @@ Two forms of the same idea:
   ``<id>L``; the frame is translated onto its centre, and the measuring touches are
   given relative to that centre.
 
+With a probe calibration (the machine's ``calibration``) each stored skip position is
+moved by ``−(r(n) − r)`` along its touch's normal before it is used
+(``compensate.calibrated_centres``, ``r`` the nominal ball radius the sequence offsets
+by): a constant in the run-time expressions, so the centre the control finds, and a
+sphere test's ``set_work_offset`` from it, carry the calibrated radius in each of the
+six directions.
+
 Every move of the locating sequence keeps ``u + d`` between the ball and the nominal
 surface (``u`` the uncertainty, ``d`` the approach distance), so it is clear wherever
 within ``u`` the sphere really is.
@@ -18,7 +25,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from probegen import ir
+from probegen.compensate import calibrated_centres, for_stylus
 from probegen.machine.profile import MachineProfile
 from probegen.planning.sphere_test import SphereTestPlan, measure_body
 
@@ -30,6 +40,18 @@ _SIDES: tuple[tuple[str, ir.Vec3], ...] = (
 
 def _var(fid: str, name: str, offset: float = 0.0) -> ir.Var:
     return ir.Var(f"{fid}_{name}", offset)
+
+
+def calibration_shift(machine: MachineProfile, normal: ir.Vec3) -> float:
+    """How far the calibration moves a ball centre's coordinate on the axis of
+    ``normal`` (unit, along X, Y or Z here): ``−(r(n) − r)·n``, mm; 0 without a
+    calibration."""
+    cal = for_stylus(machine.calibration, machine.probe.ball_radius, machine.source)
+    if cal is None:
+        return 0.0
+    n = np.asarray([normal], dtype=np.float64)
+    moved = calibrated_centres(np.zeros_like(n), n, cal, machine.probe.ball_radius)[0]
+    return float(moved[int(np.argmax(np.abs(n[0])))]) + 0.0
 
 
 class _Locator:
@@ -50,6 +72,11 @@ class _Locator:
         self.z_high = self.c[2] + self.r_off + self.approach
         self.nodes: list[ir.Node] = []
         self.index = 0
+        self.machine = machine
+
+    def at(self, name: str, normal: ir.Vec3, offset: float = 0.0) -> ir.Var:
+        """The stored skip position ``name`` of a touch along ``normal``, calibrated."""
+        return _var(self.fid, name, offset + calibration_shift(self.machine, normal))
 
     def touch(self, contact: ir.Point, normal: ir.Vec3,
               store: tuple[str | None, str | None, str | None]) -> None:
@@ -96,18 +123,19 @@ def locate_runtime(plan: SphereTestPlan, machine: MachineProfile,
     lo.nodes.append(ir.Move((cx, cy, clearance), ir.MoveMode.RAPID))
     lo.nodes.append(ir.Move((cx, cy, lo.z_high), ir.MoveMode.PROTECTED))
     lo.touch((cx, cy, cz + lo.radius), (0.0, 0.0, 1.0), (None, None, "Z1"))
-    lo.nodes.append(ir.Assign(f"{fid}_ZE", _var(fid, "Z1"), offset=-lo.r_off))
+    up = (0.0, 0.0, 1.0)
+    lo.nodes.append(ir.Assign(f"{fid}_ZE", lo.at("Z1", up, -lo.r_off)))
     for name, normal in _SIDES[:2]:
         lo.side(name, normal, cx, cy)
-    lo.nodes.append(ir.Assign(f"{fid}_CX", _var(fid, "X1"), _var(fid, "X2")))
+    lo.nodes.append(ir.Assign(f"{fid}_CX", lo.at(*_SIDES[0]), lo.at(*_SIDES[1])))
     for name, normal in _SIDES[2:]:
         lo.side(name, normal, _var(fid, "CX"), cy)
-    lo.nodes.append(ir.Assign(f"{fid}_CY", _var(fid, "Y1"), _var(fid, "Y2")))
+    lo.nodes.append(ir.Assign(f"{fid}_CY", lo.at(*_SIDES[2]), lo.at(*_SIDES[3])))
     lo.nodes.append(ir.Move((_var(fid, "CX"), _var(fid, "CY"), lo.z_high),
                            ir.MoveMode.PROTECTED))
     lo.touch((_var(fid, "CX"), _var(fid, "CY"), cz + lo.radius), (0.0, 0.0, 1.0),
              (None, None, "Z2"))
-    lo.nodes.append(ir.Assign(f"{fid}_CZ", _var(fid, "Z2"), offset=-lo.r_off))
+    lo.nodes.append(ir.Assign(f"{fid}_CZ", lo.at("Z2", up, -lo.r_off)))
     centre = (_var(fid, "CX"), _var(fid, "CY"), _var(fid, "CZ"))
     lo.nodes.append(ir.ReportCentre(fid, centre))
     lo.nodes.append(ir.Comment(f"MEASURE {fid}"))

@@ -8,6 +8,12 @@ aligned, toleranced and written to a DMIS output file by the same code as on the
 virtual CMM (:mod:`probegen.dmisrun`): features of the DMIS kinds, with the CMM's
 fits (feature compensation, the cylinder fit started from the nominal axis).
 
+With a probe calibration (``post-ingest --calibration``) each replayed ball centre is
+first moved by ``r(n) − r`` along its normal (``compensate.calibrated_centres``, ``n`` the
+reverse of the probing direction, ``r`` the posted ball radius the DMIS program
+compensates with), so the CMM code's one-radius compensation gives the calibrated
+contact point.
+
 Checks: the log is first checked against the map (:mod:`probegen.logcheck`: the run
 used, the program number and identity of the posted program, unknown and duplicate point
 ids); every touch of the map must be in the log (the last one read after a restart),
@@ -21,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.constants import MM_PER_INCH
 from probegen.dmis import parse_dmis
 from probegen.dmisrun.features import DmisFeature, arr, vec3
@@ -44,10 +51,12 @@ class _Replay:
 
     def __init__(self, fmap: FeatureMap, points: dict[tuple[str, int], Vec3],
                  source: str, cut: dict[tuple[str, int], str] | None = None,
-                 lines: dict[tuple[str, int], int] | None = None) -> None:
+                 lines: dict[tuple[str, int], int] | None = None,
+                 calibration: ProbeCalibration | None = None) -> None:
         self.fmap, self.points, self.source = fmap, points, source
         self.cut = cut or {}
         self.lines = lines or {}
+        self.calibration = calibration
         self.used = 0
 
     @property
@@ -65,7 +74,12 @@ class _Replay:
                                     f"than the feature map lists ({len(self.fmap.touches)})")
         touch = self.fmap.touches[self.used]
         self.used += 1
-        return self._checked(touch)
+        found = self._checked(touch)
+        if self.calibration is None:
+            return found
+        moved = calibrated_centres([found], [-arr(touch.direction)], self.calibration,
+                                   self.ball_radius)
+        return vec3(moved[0])
 
     def _checked(self, t: PostTouch) -> Vec3:
         key = (t.id, t.index)
@@ -90,8 +104,10 @@ class _Replay:
         return vec3(p)
 
 
-def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
-    """Run the map's DMIS program on the logged touches (see the module docstring).
+def evaluate_log(log: DprntLog, fmap: FeatureMap,
+                 calibration: ProbeCalibration | None = None) -> DmisRunResult:
+    """Run the map's DMIS program on the logged touches (see the module docstring),
+    with the probe calibration's radii when one is given.
 
     Returns:
         The DMIS run: output file text, actual and nominal features (work coordinates,
@@ -107,8 +123,9 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap) -> DmisRunResult:
     latest = [t for t in log.latest_touches() if t.kind == "PT"]
     points = {(t.feature, t.index): (t.xyz[0] * scale, t.xyz[1] * scale, t.xyz[2] * scale)
               for t in latest}
+    for_stylus(calibration, fmap.ball_diameter / 2.0, "--calibration")
     replay = _Replay(fmap, points, log.source, _cut(log),
-                     {(t.feature, t.index): t.line for t in latest})
+                     {(t.feature, t.index): t.line for t in latest}, calibration)
     result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
     if replay.used != len(fmap.touches):
         raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
@@ -138,10 +155,12 @@ def run_status(log: DprntLog, result: DmisRunResult) -> str:
                   not_evaluated=bool(cut), complete=log.complete)
 
 
-def ingest_file(log: str | Path, features: str | Path, *, run: int | None = None,
+def ingest_file(log: str | Path, features: str | Path,
+                calibration: ProbeCalibration | None = None, *, run: int | None = None,
                 ignore_identity: bool = False
                 ) -> tuple[DprntLog, DmisRunResult, tuple[str, ...]]:
-    """Evaluate a captured DPRNT ``log`` with the feature map ``features``; returns the
+    """Evaluate a captured DPRNT ``log`` with the feature map ``features`` (and the probe
+    calibration's radii when one is given); returns the
     run of the log used, the DMIS run and the notes of the log's checks (``run``,
     ``ignore_identity``: see :func:`probegen.logcheck.check_log`).
 
@@ -157,7 +176,7 @@ def ingest_file(log: str | Path, features: str | Path, *, run: int | None = None
     checked = check_log(read_dprnt(log), program=fmap.number,
                         identity=map_identity(fmap.text, fmap.touches), touches=planned,
                         run=run, ignore_identity=ignore_identity, plausibility=False)
-    return checked.log, evaluate_log(checked.log, fmap), checked.notes
+    return checked.log, evaluate_log(checked.log, fmap, calibration), checked.notes
 
 
 def results_table(result: DmisRunResult) -> str:

@@ -15,7 +15,9 @@ Optional keys the report understands beyond ``ingest``'s output:
 
 ``decisions`` (``ingest``'s in-process decisions, ``docs/actions.md``) is optional too, and
 so are ``uncertainty`` (the decision rule and its notes) and each characteristic's ``U``
-and ``decision``.
+and ``decision``; so is ``calibration.state``, which probe calibration the results were
+compensated with (``ingest`` always writes it: "uncalibrated, nominal ball radius" or the
+calibration's source, date and fingerprint).
 """
 
 from __future__ import annotations
@@ -180,6 +182,7 @@ class Results:
     status: str = "-"
     decision_rule: str = ""
     uncertainty_notes: tuple[str, ...] = ()
+    calibration: str = ""
 
 
 def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Results:
@@ -218,6 +221,7 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         status=r.status(root.get("status"), "status", _run_status(features, complete)),
         decision_rule=r.text(unc.get("decision_rule", ""), "uncertainty.decision_rule"),
         uncertainty_notes=tuple(r.texts(unc.get("notes", []), "uncertainty.notes")),
+        calibration=r.text(cal.get("state", ""), "calibration.state"),
     )
 
 

@@ -22,6 +22,7 @@ from probegen.results.dprnt_records import (
     MAX_FEATURE_ID,
     MAX_INDEX_DIGITS,
     MAX_PROGRAM_DIGITS,
+    CalibrationMark,
     Centre,
     ErrorCode,
     ProgramError,
@@ -36,7 +37,7 @@ from probegen.results.dprnt_records import (
 _UPPER = {c: c - 32 for c in range(ord("a"), ord("z") + 1)}
 """ASCII-only upper-casing: ``str.upper`` would turn 'ſ' into 'S'."""
 
-_RECORD_KEYWORDS = frozenset({"PGSTART", "LOC", "CTR", "PT", "RES", "ERR", "PGEND"})
+_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "LOC", "CTR", "PT", "RES", "ERR", "PGEND"})
 """The keywords that start a record."""
 
 _NAMES = {
@@ -78,6 +79,9 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
         identity = str(c[3]) if len(c) > 3 else None
         return _Header(_program(c[1]), version, c[2].column or 0, identity,
                        c[3].column or 0 if len(c) > 3 else 0)
+
+    def cal(self, c: list[Token]) -> CalibrationMark:
+        return CalibrationMark(str(c[1]), 0)
 
     def end(self, c: list[Token]) -> _End:
         return _End(_program(c[1]))
@@ -187,7 +191,7 @@ def _expected_at(clean: str, column: int) -> set[str]:
 def _expected_names(names: set[str]) -> str:
     """Return readable text for a set of terminal names."""
     if _RECORD_KEYWORDS <= names:
-        return "a record (PGSTART, LOC, CTR, PT, RES, ERR or PGEND)"
+        return "a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND)"
     if "UNUMBER" in names:
         names = names - {"SIGN"}
     if "$END" in names:

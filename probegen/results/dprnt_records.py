@@ -95,6 +95,22 @@ class Result:
     run: int = 0
 
 
+@dataclass(frozen=True, slots=True)
+class CalibrationMark:
+    """A ``PGCAL`` record: the fingerprint of the probe calibration the program was
+    compiled with (``compensate.ProbeCalibration.fingerprint``).
+
+    Attributes:
+        fingerprint: e.g. ``C1A2B3C4D``.
+        line: 1-based line number in the log.
+        run: the program run it belongs to (see :attr:`Touch.run`).
+    """
+
+    fingerprint: str
+    line: int
+    run: int = 0
+
+
 ErrorCode = Literal["NOTOUCH", "COLLISION", "OUTTOL", "BIGCORR", "BADFIT"]
 """``ERR`` codes: no skip signal, signal on a guarded move, a feature out of tolerance,
 a tool correction beyond its maximum, touches that fit no circle."""
@@ -160,6 +176,7 @@ class DprntLog:
         diagnostics: one per malformed or out-of-place line, in line order.
         results: ``RES`` records in log order.
         runs: one per run, in log order (see :class:`Run`).
+        calibrations: ``PGCAL`` records in log order.
     """
 
     source: str
@@ -172,6 +189,7 @@ class DprntLog:
     diagnostics: tuple[Diagnostic, ...]
     results: tuple[Result, ...] = ()
     runs: tuple[Run, ...] = ()
+    calibrations: tuple[CalibrationMark, ...] = ()
 
     def latest_touches(self) -> tuple[Touch, ...]:
         """Return one touch per (kind, feature, index), the last one read, in line order.
@@ -197,7 +215,7 @@ class _End:
     program: int
 
 
-_Record = Touch | Centre | ProgramError | Result | _Header | _End
+_Record = Touch | Centre | ProgramError | Result | CalibrationMark | _Header | _End
 
 
 class _Builder:
@@ -216,6 +234,7 @@ class _Builder:
         self.centres: list[Centre] = []
         self.errors: list[ProgramError] = []
         self.results: list[Result] = []
+        self.calibrations: list[CalibrationMark] = []
         self.diagnostics: list[Diagnostic] = []
         self.starts: dict[int, _Header] = {}
         self.start_lines: dict[int, int] = {}
@@ -247,6 +266,8 @@ class _Builder:
             self.centres.append(rec)
         elif isinstance(rec, Result):
             self.results.append(rec)
+        elif isinstance(rec, CalibrationMark):
+            self.calibrations.append(rec)
         else:
             self.errors.append(rec)
 
@@ -314,6 +335,7 @@ class _Builder:
             diagnostics=tuple(self.diagnostics),
             results=tuple(self.results),
             runs=tuple(self._run(k) for k in range(self.run + 1)),
+            calibrations=tuple(self.calibrations),
         )
 
     def _run(self, k: int) -> Run:

@@ -40,7 +40,7 @@ import numpy as np
 
 from probegen.alarms import SimAlarm
 from probegen.machine.kinematics import Machine, Topology
-from probegen.machine.probe_model import ProbeModel
+from probegen.machine.probe_model import ProbeModel, tilted_probe_frame
 from probegen.sim.contact import ContactHit, PlacedPart
 
 Vec3 = tuple[float, float, float]
@@ -122,10 +122,7 @@ class VirtualMachine:
         """A machine-frame direction in the probe frame (its z tilts with B)."""
         if not self.rotary:
             return direction
-        b = np.radians(self.angles["B"])
-        c, s = np.cos(b), np.sin(b)
-        return np.array([c * direction[0] - s * direction[2], direction[1],
-                         s * direction[0] + c * direction[2]])
+        return tilted_probe_frame(direction, float(self.angles["B"]))
 
     def _clear(self, start: Vec3, end: Vec3, what: str) -> None:
         self._clear_actual(self.actual(start), self.actual(end), what)
