@@ -468,6 +468,7 @@ def do_output(state: VmState, st: Statement) -> None:
         if ref.kind == "FA":
             last = state.actual(ref.name)
             texts.append(feature_text("FA", last, state.frame, state.scale))
+            texts.extend(f"$$ FA({last.name}) warning: {note}" for note in last.notes)
         elif ref.kind == "F":
             texts.append(feature_text("F", state.nominal(ref.name), state.frame,
                                       state.scale))
