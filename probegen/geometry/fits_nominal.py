@@ -179,8 +179,15 @@ def _others(kind: str, points: FloatArray, kept: AxialFit,
             continue
         if _distinct(other, base) and all(_distinct(other, seen) for seen in found):
             found.append(other)
-    return tuple(f"the points also fit {_describe(o, offset)} (RMS residual {o.rms:.4g} against "
-                 f"{base.rms:.4g}); the fit kept the one nearest the nominal" for o in found)
+    return tuple(f"the points also fit {_describe(o, offset)} (RMS residual {_num(o.rms, 4)} "
+                 f"against {_num(base.rms, 4)}); the fit kept the one nearest the nominal"
+                 for o in found)
+
+
+def _num(value: float, digits: int = 3) -> str:
+    """``value`` with ``digits`` decimals, never ``-0.000``."""
+    text = f"{value:.{digits}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
 
 
 def _radius(fit: AnyFit) -> float:
@@ -219,8 +226,8 @@ def _angle(a: FloatArray, b: FloatArray) -> float:
 
 def _describe(fit: AnyFit, offset: float) -> str:
     """``a cylinder D24.012 with axis (-0.707, -0.707, 0.000) through (x, y, z)``."""
-    axis = ", ".join(f"{v:.3f}" for v in fit.axis) if not isinstance(fit, SphereFit) else ""
-    where = ", ".join(f"{v:.3f}" for v in _axis_point(fit))
+    axis = ", ".join(_num(v) for v in fit.axis) if not isinstance(fit, SphereFit) else ""
+    where = ", ".join(_num(v) for v in _axis_point(fit))
     if isinstance(fit, ConeFit):
         return (f"a cone of half angle {math.degrees(fit.half_angle):.3f} deg with axis "
                 f"({axis}) through ({where})")
