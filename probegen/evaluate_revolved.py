@@ -52,7 +52,9 @@ checked against the ``diameter`` tolerance (every local size within the limits),
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -61,8 +63,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
-from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
-from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry import minimum_zone
+from probegen.geometry.fits import (
+    Circle3dFit,
+    ConeFit,
+    CylinderFit,
+    SphereFit,
+    TorusFit,
+    fit_circle_2d,
+)
+from probegen.geometry.fits_nominal import AnyFit, FitCheck, NominalShape, fit_near
 from probegen.geometry.frames import rotation_to_z
 
 Vec3 = tuple[float, float, float]
@@ -88,6 +98,8 @@ class Limits(Protocol):
     def taper(self) -> float | None: ...
     @property
     def angle(self) -> tuple[float, float] | None: ...
+    @property
+    def form_method(self) -> str: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,6 +148,9 @@ class RevolvedResult:
         half_angle: a cone's fitted half angle, rad, else None.
         apex: a cone's fitted apex, mm, else None.
         major_diameter: a torus's fitted major diameter, mm, else None.
+        notes: what the fit found besides the feature: other solutions the touches
+            admit (``geometry.fits_nominal``; the fit kept the one nearest the nominal).
+        condition: the fit's condition number (``geometry.fits_conditioning``).
     """
 
     feature: str
@@ -151,6 +166,8 @@ class RevolvedResult:
     half_angle: float | None = None
     apex: Vec3 | None = None
     major_diameter: float | None = None
+    notes: tuple[str, ...] = ()
+    condition: float | None = None
 
     @property
     def ok(self) -> bool | None:
@@ -174,6 +191,8 @@ class _Fit:
     half_angle: float | None = None
     apex: Vec3 | None = None
     major_diameter: float | None = None
+    check: FitCheck | None = None
+    form_method: str = minimum_zone.LABELS["least_squares"]
 
 
 def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
@@ -190,8 +209,9 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         limits: the feature's tolerances.
 
     Raises:
-        ProbegenError: the touches lie in too few sections for the kind, or the fit
-            failed (too few or degenerate points).
+        ProbegenError: the touches lie in too few sections for the kind, the fit
+            failed (too few or degenerate points), or it converged far from the
+            nominal (``geometry.fits_nominal``: not a measurement of this feature).
     """
     c = np.asanyarray(ball_centres, dtype=np.float64).reshape(-1, 3)
     k = np.asanyarray(sections, dtype=np.int64).reshape(-1)
@@ -202,6 +222,9 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
     v0 = np.asarray(nominal.axis, dtype=np.float64)
     sign = 1.0 if nominal.ball_inside else -1.0  # surface size = ball size + sign·r
     fit = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
+    check = fit.check or FitCheck(math.nan)
+    if check.far:
+        raise ProbegenError(f"feature {feature}: {check.far}; not reported as a measurement")
     off = fit.centre - np.asarray(nominal.centre if nominal.kind != "cone" else
                                   nominal.sections[0][0])
     across = off if nominal.kind == "sphere" else off - (off @ v0) * v0
@@ -215,7 +238,8 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
     if nominal.kind != "cone":
         chars.append(_size("D", fit.diameter, nominal.diameter, limits.diameter))
     chars.extend(fit.extra)
-    chars.append(Characteristic("FORM", fit.form, 0.0, fit.form, None, limits.form))
+    chars.append(Characteristic("FORM", fit.form, 0.0, fit.form, None, limits.form,
+                                method=fit.form_method))
     bad = [ch.name for ch in chars if not math.isfinite(ch.measured)]
     if bad or not np.all(np.isfinite(points)):
         raise ProbegenError(f"feature {feature}: expected touches that determine the "
@@ -225,8 +249,11 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         feature=feature, kind=nominal.kind, centre=_v(fit.centre), axis=_v(fit.axis),
         diameter=fit.diameter, form=fit.form, points=tuple(_v(p) for p in points),
         directions=tuple(_v(n) for n in out_normals),
-        residuals=tuple(float(x) for x in fit.residuals), characteristics=tuple(chars),
-        half_angle=fit.half_angle, apex=fit.apex, major_diameter=fit.major_diameter)
+        residuals=tuple(float(x) for x in -sign * fit.residuals),
+        characteristics=tuple(chars),
+        half_angle=fit.half_angle, apex=fit.apex, major_diameter=fit.major_diameter,
+        notes=tuple(f"feature {feature}: {note}" for note in check.alternatives),
+        condition=check.condition)
 
 
 def _size(name: str, measured: float, nominal: float,
@@ -248,18 +275,29 @@ def _radial(c: Array, centre: Array, axis: Array) -> tuple[Array, Array]:
     return dist, across / dist[:, None]
 
 
+def _near(nominal: Nominal, c: Array, grow: float) -> tuple[AnyFit, FitCheck]:
+    """The fit of the ball centres started from the nominal (``fits_nominal``)."""
+    radius = max(nominal.diameter / 2.0 - grow, 0.0)
+    axis = None if nominal.kind == "sphere" else nominal.axis
+    return fit_near(c, NominalShape(nominal.kind, axis, radius, nominal.half_angle, grow))
+
+
 def _circle(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_circle_3d(c)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, Circle3dFit)
     centre = np.asarray(fit.centre)
     axis = _signed(np.asarray(fit.normal), np.asarray(nominal.axis))
     dist, outward = _radial(c, centre, axis)
     res = dist - fit.radius
-    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
-                outward)
+    in_plane = ((c - centre) @ rotation_to_z(axis).T)[:, :2]
+    form, method = _form(limits, res, lambda: minimum_zone.roundness(in_plane, (0.0, 0.0)))
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), form, res, outward, check=check,
+                form_method=method)
 
 
 def _cylinder(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_cylinder(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, CylinderFit)
     v0 = np.asarray(nominal.axis)
     axis = _signed(np.asarray(fit.axis), v0)
     point = np.asarray(fit.point)
@@ -272,8 +310,9 @@ def _cylinder(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limi
     t = limits.taper
     extra += (Characteristic("TAPER", taper, 0.0, taper, None if t is None else -t, t),
               _size("TILT", _degrees(axis, v0), 0.0, None))
-    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
-                outward, extra)
+    form, method = _form(limits, res, lambda: minimum_zone.cylindricity(c, centre, axis))
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), form, res, outward, extra,
+                check=check, form_method=method)
 
 
 def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
@@ -295,18 +334,30 @@ def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
         local = (c[k == j] - point) @ frame.T
         rho = np.hypot(local[:, 0], local[:, 1])
         scale = (rho - slope * (local[:, 2] - local[:, 2].mean())) / rho
-        circle = fit_circle_2d(local[:, :2] * scale[:, None])
+        flat = local[:, :2] * scale[:, None]
+        circle = fit_circle_2d(flat)
+        ron, method = _form(limits, np.asarray(circle.residuals),
+                            functools.partial(minimum_zone.roundness, flat, circle.centre))
         d = 2.0 * (circle.radius + grow) if gauge is None else gauge[j]
         diameters.append(d)
         heights.append(float(np.mean(local[:, 2])))
         out.append(_size(f"D_S{j + 1}", d, nominal.sections[j][1], limits.diameter))
-        out.append(Characteristic(f"RON_S{j + 1}", circle.form, 0.0, circle.form, None,
-                                  limits.roundness))
+        out.append(Characteristic(f"RON_S{j + 1}", ron, 0.0, ron, None, limits.roundness,
+                                  method=method))
     return tuple(out), np.asarray(diameters), np.asarray(heights)
 
 
+def _form(limits: Limits, residuals: Array, zone: Callable[[], float]) -> tuple[float, str]:
+    """The form value by the feature's ``form_method`` and the method's name: the
+    minimum zone (``zone()``) or the range of the least-squares ``residuals``."""
+    if limits.form_method == "least_squares":
+        return float(residuals.max() - residuals.min()), minimum_zone.LABELS["least_squares"]
+    return zone(), minimum_zone.LABELS["minimum_zone"]
+
+
 def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_cone(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, ConeFit)
     alpha = fit.half_angle
     axis, point = np.asarray(fit.axis), np.asarray(fit.point)
     v0 = np.asarray(nominal.axis)
@@ -329,21 +380,23 @@ def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) 
     normals = math.cos(alpha) * e - math.sin(alpha) * axis[None, :]
     res = np.asarray(fit.residuals)
     return _Fit(top, axis, gauges[0][1], float(res.max() - res.min()), res, normals,
-                (ang, *extra), alpha, _v(apex))
+                (ang, *extra), alpha, _v(apex), check=check)
 
 
 def _sphere(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_sphere(c)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, SphereFit)
     centre = np.asarray(fit.centre)
     rel = c - centre
     res = np.asarray(fit.residuals)
-    return _Fit(centre, np.asarray(nominal.axis), 2.0 * (fit.radius + grow),
-                float(res.max() - res.min()), res,
-                rel / np.linalg.norm(rel, axis=1)[:, None])
+    form, method = _form(limits, res, lambda: minimum_zone.sphericity(c, centre))
+    return _Fit(centre, np.asarray(nominal.axis), 2.0 * (fit.radius + grow), form, res,
+                rel / np.linalg.norm(rel, axis=1)[:, None], check=check, form_method=method)
 
 
 def _torus(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_torus(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, TorusFit)
     centre = np.asarray(fit.centre)
     axis = _signed(np.asarray(fit.axis), np.asarray(nominal.axis))
     _, e = _radial(c, centre, axis)
@@ -353,7 +406,7 @@ def _torus(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits)
     return _Fit(centre, axis, 2.0 * (fit.minor_radius + grow), float(res.max() - res.min()),
                 res, tube / np.linalg.norm(tube, axis=1)[:, None],
                 (_size("DMAJ", dmaj, nominal.major_diameter, None),),
-                major_diameter=dmaj)
+                major_diameter=dmaj, check=check)
 
 
 _FITS = {"circle": _circle, "cylinder": _cylinder, "cone": _cone, "sphere": _sphere,

@@ -241,12 +241,14 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: dict[tuple[str, int], 
                      f"{f', in {sections} sections' if sections > 1 else ''})")
         return None
     try:
-        return evaluate_revolved(
+        result = evaluate_revolved(
             feature.id, nominal_of(plan), [touches[(feature.id, k)] for k in found], which,
             ball_radius=spec.machine.probe.ball_radius, limits=feature.tolerance)
     except ProbegenError as exc:
         notes.append(f"feature {feature.id}: not evaluated: {exc}")
         return None
+    notes.extend(result.notes)  # other solutions the touches admit
+    return result
 
 
 def nominal_of(plan: Any) -> Nominal:
@@ -310,7 +312,8 @@ def _measured_json(characteristics: Any, points: Any, directions: Any,
             {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
              "deviation": _f(c.deviation),
              "lower": None if c.lower is None else _f(c.lower),
-             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok}
+             "upper": None if c.upper is None else _f(c.upper), "ok": c.ok,
+             **({"method": c.method} if c.method else {})}
             for c in characteristics
         ],
         "points": [[_f(v) for v in p] for p in points],
@@ -389,26 +392,29 @@ def to_csv(ing: Ingested) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
-                "upper", "status"])
+                "upper", "status", "method"])
     rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
         *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             w.writerow([r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
                         f"{c.deviation:.4f}", "" if c.lower is None else f"{c.lower:.4f}",
-                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok)])
+                        "" if c.upper is None else f"{c.upper:.4f}", _status(c.ok),
+                        c.method])
     return buf.getvalue()
 
 
 def to_table(ing: Ingested) -> str:
     """The table ``probegen ingest`` prints."""
-    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status")]
+    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status",
+             "method")]
     rs: list[SphereTestResult | RevolvedResult | FreeformResult] = [
         *ing.results, *ing.revolved, *ing.freeform]
     for r in rs:
         for c in r.characteristics:
             rows.append((r.feature, c.name, f"{c.measured:.4f}", f"{c.nominal:.4f}",
-                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok)))
+                         f"{c.deviation:+.4f}", _tol(c.lower, c.upper), _status(c.ok),
+                         c.method))
     text = _columns(rows)
     if ing.decisions:
         text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [

@@ -263,7 +263,8 @@ def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) 
         axis = signed_like(arr(fit.axis), nominal.vector)
         location = _onto_line(arr(nominal.location), arr(fit.point), axis)
         return replace(nominal, location=vec3(location), vector=vec3(axis),
-                       size=2.0 * (fit.radius + grow), form=fit.form, notes=notes, condition=condition)
+                       size=2.0 * (fit.radius + grow), form=fit.form, notes=notes,
+                       condition=condition)
     if isinstance(fit, TorusFit):
         # the ball centres lie on a torus with the same centre circle, tube -grow larger
         return replace(nominal, location=fit.centre,
@@ -276,7 +277,8 @@ def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) 
     apex = arr(fit.apex) - (grow / math.sin(fit.half_angle)) * opening
     return replace(nominal, location=vec3(apex),
                    vector=vec3(signed_like(opening, nominal.vector)),
-                   size=math.degrees(2.0 * fit.half_angle), form=fit.form, notes=notes, condition=condition)
+                   size=math.degrees(2.0 * fit.half_angle), form=fit.form, notes=notes,
+                   condition=condition)
 
 
 _SHAPES = {"CIRCLE": "circle", "CYLNDR": "cylinder", "SPHERE": "sphere", "CONE": "cone",

@@ -224,9 +224,9 @@ def _angle(a: FloatArray, b: FloatArray) -> float:
     return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), abs(float(a @ b))))
 
 
-def _describe(fit: AnyFit, offset: float) -> str:
+def _describe(fit: AxialFit, offset: float) -> str:
     """``a cylinder D24.012 with axis (-0.707, -0.707, 0.000) through (x, y, z)``."""
-    axis = ", ".join(_num(v) for v in fit.axis) if not isinstance(fit, SphereFit) else ""
+    axis = ", ".join(_num(v) for v in fit.axis)
     where = ", ".join(_num(v) for v in _axis_point(fit))
     if isinstance(fit, ConeFit):
         return (f"a cone of half angle {math.degrees(fit.half_angle):.3f} deg with axis "

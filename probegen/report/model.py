@@ -42,6 +42,7 @@ class Characteristic:
     lower: float | None
     upper: float | None
     ok: bool | None
+    method: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,7 +228,8 @@ def _characteristic(r: _Reader, value: object, key: str) -> Characteristic:
         deviation=r.number(c.get("deviation"), f"{key}.deviation"),
         lower=r.optional_number(c.get("lower"), f"{key}.lower"),
         upper=r.optional_number(c.get("upper"), f"{key}.upper"),
-        ok=r.flag(c.get("ok"), f"{key}.ok"))
+        ok=r.flag(c.get("ok"), f"{key}.ok"),
+        method=r.text(c.get("method", ""), f"{key}.method"))
 
 
 def _segment(r: _Reader, value: object, key: str) -> Segment:
