@@ -84,7 +84,9 @@ MIN_SECTIONS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 3}
 
 
 class Limits(Protocol):
-    """The tolerances ``evaluate_revolved`` reads (``spec.RevolvedTolerance``)."""
+    """The tolerances ``evaluate_revolved`` reads (``spec.RevolvedTolerance``); an
+    optional ``form_method`` attribute (``"minimum_zone"``, the default, or
+    ``"least_squares"``) chooses how form is evaluated."""
 
     @property
     def diameter(self) -> tuple[float, float] | None: ...
@@ -98,8 +100,6 @@ class Limits(Protocol):
     def taper(self) -> float | None: ...
     @property
     def angle(self) -> tuple[float, float] | None: ...
-    @property
-    def form_method(self) -> str: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -350,7 +350,7 @@ def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
 def _form(limits: Limits, residuals: Array, zone: Callable[[], float]) -> tuple[float, str]:
     """The form value by the feature's ``form_method`` and the method's name: the
     minimum zone (``zone()``) or the range of the least-squares ``residuals``."""
-    if limits.form_method == "least_squares":
+    if getattr(limits, "form_method", "minimum_zone") == "least_squares":
         return float(residuals.max() - residuals.min()), minimum_zone.LABELS["least_squares"]
     return zone(), minimum_zone.LABELS["minimum_zone"]
 

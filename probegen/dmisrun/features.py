@@ -48,8 +48,9 @@ from probegen.geometry.fits import (
     fit_line_3d,
     fit_plane,
 )
+from probegen.geometry import minimum_zone
 from probegen.geometry.fits_nominal import NominalShape, fit_near
-from probegen.geometry.frames import FloatArray, unit
+from probegen.geometry.frames import FloatArray, orthonormal_basis, unit
 
 Vec3 = tuple[float, float, float]
 Compensation = Literal["feature", "vector"]
@@ -80,9 +81,9 @@ class DmisFeature:
         length: cylinder length, None if not given.
         end: end point of a bounded line.
         normal: the line's plane normal (``LINE`` with a third vector).
-        form: actual only: flatness, roundness, cylindricity, sphericity, conicity or
-            straightness from the fit residuals (a torus: the fit's ``max - min``
-            residual).
+        form: actual only: flatness, roundness, cylindricity, sphericity or
+            straightness by the ISO 1101 minimum zone (``geometry.minimum_zone``); a
+            cone's conicity and a torus's form: the least-squares ``max - min`` residual.
         points: actual only: the compensated contact points, ``(n, 3)`` as tuples.
         notes: actual only: what the fit found besides the feature (another solution
             the points admit: :mod:`probegen.geometry.fits_nominal`).
@@ -238,7 +239,7 @@ def _fit_plane(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
     side = 1.0 if float(vectors.sum(axis=0) @ n) >= 0.0 else -1.0
     point = arr(fit.point) - side * radius * n
     return replace(nominal, location=_onto_plane(arr(nominal.location), point, n),
-                   vector=vec3(n), form=fit.form)
+                   vector=vec3(n), form=minimum_zone.flatness(centres, fit.point, fit.normal))
 
 
 def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) -> DmisFeature:
@@ -253,18 +254,22 @@ def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) 
         raise ProbegenError(f"{check.far}; not reported as a measurement")
     notes, condition = check.alternatives, check.condition
     if isinstance(fit, Circle3dFit):
+        in_plane = (centres - arr(fit.centre)) @ orthonormal_basis(arr(fit.normal))[:2].T
         return replace(nominal, location=fit.centre, size=2.0 * (fit.radius + grow),
                        vector=vec3(signed_like(arr(fit.normal), nominal.vector)),
-                       form=fit.form, notes=notes, condition=condition)
+                       form=minimum_zone.roundness(in_plane, (0.0, 0.0)), notes=notes,
+                       condition=condition)
     if isinstance(fit, SphereFit):
         return replace(nominal, location=fit.centre, size=2.0 * (fit.radius + grow),
-                       form=fit.form, notes=notes, condition=condition)
+                       form=minimum_zone.sphericity(centres, fit.centre), notes=notes,
+                       condition=condition)
     if isinstance(fit, CylinderFit):
         axis = signed_like(arr(fit.axis), nominal.vector)
         location = _onto_line(arr(nominal.location), arr(fit.point), axis)
         return replace(nominal, location=vec3(location), vector=vec3(axis),
-                       size=2.0 * (fit.radius + grow), form=fit.form, notes=notes,
-                       condition=condition)
+                       size=2.0 * (fit.radius + grow),
+                       form=minimum_zone.cylindricity(centres, fit.point, fit.axis),
+                       notes=notes, condition=condition)
     if isinstance(fit, TorusFit):
         # the ball centres lie on a torus with the same centre circle, tube -grow larger
         return replace(nominal, location=fit.centre,
@@ -298,7 +303,8 @@ def _nominal_shape(nominal: DmisFeature, grow: float) -> NominalShape:
 def _fit_line(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
     fit = fit_line_3d(points)
     d = signed_like(arr(fit.direction), nominal.vector)
-    return _line_actual(nominal, arr(fit.point), d, fit.form)
+    return _line_actual(nominal, arr(fit.point), d,
+                        minimum_zone.straightness_3d(points, fit.point, fit.direction))
 
 
 def _line_actual(nominal: DmisFeature, point: FloatArray, direction: FloatArray,
