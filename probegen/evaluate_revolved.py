@@ -363,8 +363,14 @@ def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) 
     v0 = np.asarray(nominal.axis)
     shift = grow / math.cos(alpha)  # surface section radius = ball cone's + shift
 
+    top_centre = np.asarray(nominal.sections[0][0])
+    top_t = float((top_centre - point) @ axis)  # the top centre's foot on the fitted axis
+
     def at_gauge(centre: Vec3) -> tuple[Array, float]:
-        t = float((np.asarray(centre) - point) @ v0) / float(axis @ v0)
+        """Gauge point and diameter: square to the fitted axis, the nominal spacing of
+        the sections kept along it from the top one (the part frame follows the
+        feature: a part moved or tilted about its top gauge point reads the same)."""
+        t = top_t + float((np.asarray(centre) - top_centre) @ v0)
         return point + t * axis, 2.0 * (fit.radius + t * math.tan(alpha) + shift)
 
     gauges = [at_gauge(centre) for centre, _ in nominal.sections]

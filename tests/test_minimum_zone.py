@@ -181,3 +181,35 @@ def test_form_method_spec_key(tmp_path: Path) -> None:
                if hasattr(f.tolerance, "form_method"))
     with pytest.raises(SpecError, match="form_method"):
         load(text + '\n[evaluation]\nform_method = "chebyshev"\n')
+
+
+def test_a_displaced_cone_gives_the_same_gauge_diameters() -> None:
+    """Gauge planes follow the feature: a cone moved across its axis, or tilted about
+    its top gauge point, gives the gauge diameters of the cone in place (the planes are
+    square to the fitted axis, at their nominal spacing from the top one).  A move
+    along the axis is a size error for a cone measured alone (docs/results.md)."""
+    from test_evaluate_revolved import R_BALL as CONE_BALL
+    from test_evaluate_revolved import cone_centres, placed
+
+    alpha = math.atan(0.2)
+    theta = np.tile(0.1 + 2.0 * math.pi * np.arange(8) / 8, 2)
+    h = np.repeat([15.0, 5.0], 8)
+    c = cone_centres(8.0, alpha, h, theta, np.full(16, 0.004), False)
+    sections = (((0.0, 0.0, 15.0), 22.0), ((0.0, 0.0, 5.0), 18.0))
+    nominal = Nominal("cone", (0.0, 0.0, -40.0), (0.0, 0.0, 1.0), 0.0, True, sections,
+                      half_angle=alpha)
+    k = np.repeat([0, 1], 8)
+
+    def gauges(points: np.ndarray) -> list[float]:
+        res = evaluate_revolved("C", nominal, points, k, ball_radius=CONE_BALL,
+                                limits=Limits())
+        return [c.measured for c in res.characteristics if c.name.startswith("D_S")]
+
+    home = gauges(c)
+    assert home == pytest.approx([22.008, 18.008], abs=1e-6)
+    across = gauges(c + np.array([0.4, -0.3, 0.0]))
+    assert across == pytest.approx(home, abs=1e-6)
+    tilt = np.array([0.002, -0.001, 1.0])  # 0.13 degrees about the top gauge point
+    top = np.array([0.0, 0.0, 15.0])
+    tilted = gauges(placed(c - top, top, tilt))
+    assert tilted == pytest.approx(home, abs=1e-9)

@@ -40,6 +40,7 @@ from typing import Literal
 import numpy as np
 
 from probegen.errors import ProbegenError
+from probegen.geometry import minimum_zone
 from probegen.geometry.fits import (
     Circle3dFit,
     CylinderFit,
@@ -48,7 +49,6 @@ from probegen.geometry.fits import (
     fit_line_3d,
     fit_plane,
 )
-from probegen.geometry import minimum_zone
 from probegen.geometry.fits_nominal import NominalShape, fit_near
 from probegen.geometry.frames import FloatArray, orthonormal_basis, unit
 
