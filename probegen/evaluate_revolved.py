@@ -15,7 +15,10 @@ size is the fitted size offset back by the ball, exactly; compensating each touc
 its *planned* normal instead would leave a cosine error of about ``r·θ²/2`` for a part
 ``θ`` rad off its nominal direction.  The reported contact points are the ball centres
 moved by ``r`` along the fitted surface normals; residuals are the orthogonal distances
-to the fitted offset surface (``+`` away from the axis; a torus: out of the tube).
+to the fitted offset surface, ``+`` where material is outside it (along the outward
+material normal: away from the axis on a boss, towards it in a bore; docs/results.md).
+Every fit starts from the nominal (``geometry.fits_nominal``): other solutions the
+touches admit are named in the result's ``notes``; a fit far from the nominal raises.
 
 Kinds and characteristics (names as in ``results.json``; lengths in mm, angles in
 degrees):
@@ -30,8 +33,9 @@ degrees):
   nominal axis).
 * cone (``fit_cone``, at least two sections): ``X Y Z`` (the fitted axis in the top
   gauge plane), ``POS``, ``ANGLE`` (half angle), per section ``D_Sk`` (the fitted
-  cone's diameter in the gauge plane: the plane through the nominal section centre
-  square to the nominal axis) and ``RON_Sk``, ``FORM`` (conicity); the record holds the
+  cone's diameter in the gauge plane: square to the fitted axis, the top one through
+  the foot of the nominal top section centre on it, the others at their nominal spacing
+  from it) and ``RON_Sk``, ``FORM`` (conicity, least squares); the record holds the
   apex.
 * sphere (``fit_sphere``, touches in at least two sections): ``X Y Z``, ``POS`` (the
   diameter of a spherical zone about the nominal centre), ``D``, ``FORM``.
@@ -41,9 +45,11 @@ degrees):
 
 ``POS`` is the diameter of the position zone: twice the distance of the centre from the
 nominal axis, square to it (ISO 1101); a sphere: twice the distance from the nominal
-centre.  Roundness ``RON_Sk`` is least-squares (Gaussian, ISO 12181 LSCI) peak to
-valley: the ball centres of section ``k`` projected on the plane square to the fitted
-axis, a least-squares circle, the range of its radial residuals (equal to the
+centre.  Roundness ``RON_Sk``, a circle's, cylinder's and sphere's ``FORM`` are by the
+ISO 1101 minimum zone (``geometry.minimum_zone``) or, with ``form_method =
+"least_squares"``, the range of the least-squares residuals (ISO 12181 LSCI); the
+characteristic's ``method`` names it.  ``RON_Sk`` uses the ball centres of section
+``k`` projected on the plane square to the fitted axis (their zone equals the
 surface's: the ball centres lie ``r`` off it along the normal).  Each ``D_Sk`` is
 checked against the ``diameter`` tolerance (every local size within the limits),
 ``RON_Sk`` against ``roundness``, ``TAPER`` against ``±taper``, ``ANGLE`` against
@@ -143,7 +149,7 @@ class RevolvedResult:
         form: roundness, cylindricity, conicity or sphericity, mm.
         points: contact points, mm.
         directions: their fitted outward normals.
-        residuals: residuals, mm (+ away from the axis; a torus: out of the tube).
+        residuals: residuals, mm (+ where material is outside the fitted surface).
         characteristics: the checked quantities.
         half_angle: a cone's fitted half angle, rad, else None.
         apex: a cone's fitted apex, mm, else None.
