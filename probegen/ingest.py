@@ -350,6 +350,9 @@ def _revolved_json(r: RevolvedResult) -> dict[str, Any]:
         **({} if r.half_angle is None else {"half_angle_deg": _f(math.degrees(r.half_angle))}),
         **({} if r.apex is None else {"apex": [_f(v) for v in r.apex]}),
         **({} if r.major_diameter is None else {"major_diameter": _f(r.major_diameter)}),
+        # how well the touches determine the fit (geometry.fits_conditioning), 4 digits
+        **({} if r.condition is None or not math.isfinite(r.condition)
+           else {"condition": float(f"{r.condition:.4g}")}),
         **_measured_json(r.characteristics, r.points, r.directions, r.residuals),
     }
 
