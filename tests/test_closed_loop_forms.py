@@ -167,7 +167,8 @@ def test_fanuc_bore_block_size_taper_roundness(tmp_path: Path) -> None:
     from probegen.report.html import render_report
 
     html = render_report(json.loads(js))
-    assert all(f">{name}<" in html for name in ("D_S1", "RON_S1", "TAPER", "TILT"))
+    assert all(f">{name}<" in html for name in ("D_S1", "TAPER", "TILT"))
+    assert ">RON_S1 <small>minimum zone</small><" in html
 
 
 def test_dmis_bore_block_with_forms_on_the_virtual_cmm(tmp_path: Path) -> None:
