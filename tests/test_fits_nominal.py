@@ -12,10 +12,13 @@ from conftest import SHARED
 
 from probegen import cad
 from probegen.dmisrun.interpreter import run_dmis
+from probegen.errors import ProbegenError
+from probegen.evaluate_revolved import Nominal, evaluate_revolved
 from probegen.geometry.fits_nominal import FAR_TILT, NominalShape, fit_near
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import CmmAdapter, VirtualMachine
+from probegen.spec import RevolvedTolerance
 
 DCX = SHARED / "ref" / "nist-ippdme" / "DCXpart"
 PROGRAM = DCX / "DMIS" / "IMTS_M_clean.dmi"
@@ -96,3 +99,24 @@ def test_dcx_cyl1_on_the_virtual_cmm_with_noise(seed: int, dcx_part: PlacedPart)
     assert tilt < 0.05  # degrees: the noise over 6 mm tilts it by ~0.01
     assert any("also fit a cylinder D24.0" in note for note in cyl1.notes)
     assert "$$ FA(CYL1) warning: the points also fit a cylinder D24.0" in result.output
+
+
+def test_ingest_evaluation_names_the_second_cylinder_and_refuses_a_far_one() -> None:
+    """evaluate_revolved (ingest) starts from the plan's nominal: CYL1's pattern keeps the
+    nominal bore and notes the other cylinder; a nominal 30 degrees off is refused."""
+    ball = 2.0
+    centres = two_rings(15.5 - ball)  # ball centres in a D31 bore
+    sections = (((0.0, 0.0, 23.0), 31.0), ((0.0, 0.0, 17.0), 31.0))
+    limits = RevolvedTolerance()
+    bore = Nominal("cylinder", (0.0, 0.0, 20.0), (0.0, 0.0, 1.0), 31.0, True, sections)
+    res = evaluate_revolved("CYL1", bore, centres, [0, 0, 0, 0, 1, 1, 1, 1],
+                            ball_radius=ball, limits=limits)
+    assert res.diameter == pytest.approx(31.0, abs=1e-9)
+    assert res.notes and res.notes[0].startswith("feature CYL1: the points also fit a cylinder")
+    assert res.condition is not None and res.condition > 1.0
+    s = math.sin(math.radians(30.0))
+    tilted = Nominal("cylinder", (0.0, 0.0, 20.0), (s, 0.0, math.cos(math.radians(30.0))),
+                     31.0, True, sections)
+    with pytest.raises(ProbegenError, match="far from the nominal.*not reported"):
+        evaluate_revolved("CYL1", tilted, centres, [0, 0, 0, 0, 1, 1, 1, 1],
+                          ball_radius=ball, limits=limits)

@@ -248,10 +248,12 @@ def _far(nominal: NominalShape, fit: AnyFit) -> str:
         if off > FAR_TILT:
             reasons.append(f"its half angle is {off:.1f} deg off the nominal "
                            f"(limit {FAR_TILT:g})")
-    elif nominal.radius > 0.0:
-        ratio = abs(_radius(fit) - nominal.radius) / nominal.radius
+    elif nominal.radius + nominal.offset > 0.0:
+        # judged on the measured surface, not the ball centres' (a small bore's ball
+        # centres lie on a tiny cylinder)
+        size, ref = 2 * (_radius(fit) + nominal.offset), 2 * (nominal.radius + nominal.offset)
+        ratio = abs(size - ref) / ref
         if ratio > FAR_SIZE:
-            size, ref = 2 * (_radius(fit) + nominal.offset), 2 * (nominal.radius + nominal.offset)
             reasons.append(f"its diameter {size:.4g} is {100 * ratio:.0f} % off "
                            f"the nominal {ref:.4g} (limit "
                            f"{100 * FAR_SIZE:.0f} %)")
