@@ -10,6 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen.errors import SpecError
 from probegen.evaluate import evaluate_sphere_test
@@ -213,3 +216,18 @@ def test_a_displaced_cone_gives_the_same_gauge_diameters() -> None:
     top = np.array([0.0, 0.0, 15.0])
     tilted = gauges(placed(c - top, top, tilt))
     assert tilted == pytest.approx(home, abs=1e-9)
+
+
+@settings(max_examples=examples(40))
+@given(st.lists(st.floats(-0.01, 0.01), min_size=5, max_size=40),
+       st.floats(0.0, 2.0 * math.pi))
+def test_minimum_zone_roundness_is_never_wider_than_least_squares(
+        deviations: list[float], phase: float) -> None:
+    n = len(deviations)
+    theta = phase + 2.0 * math.pi * np.arange(n) / n
+    r = 10.0 + np.asarray(deviations)
+    points = np.column_stack([r * np.cos(theta), r * np.sin(theta)])
+    ls = fit_circle_2d(points)
+    zone = mz.roundness(points, ls.centre)
+    assert 0.0 <= zone <= ls.form + 1e-12
+    assert zone <= float(np.ptp(r)) + 1e-9  # the zone about the origin is one candidate
