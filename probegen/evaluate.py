@@ -2,11 +2,13 @@
 
 The sphere test (method M1, ISO 10360-5): a least-squares (Gaussian) sphere through the
 compensated contact points; radial residuals ``r_i = |P_i − C| − R``; probing form error
-``P_FTU = max r_i − min r_i``; size error ``P_STU = D_fit − D_cal``.  When the points were
-compensated with the nominal ball radius ``r``, the probe's effective radius is
-``r_eff = r + R_fit − R_cal`` (a smaller effective radius, from pre-travel, makes the
-sphere look smaller), and the effective radius in each measured direction is
-``r + |P_i − C| − R_cal``: that is the probe calibration the test produces.
+``P_FTU = max r_i − min r_i`` (least squares, as ISO 10360-5 defines it); size error
+``P_STU = D_fit − D_cal``.  When the points were compensated with the nominal ball
+radius ``r``, the probe's effective radius is ``r_eff = r + R_fit − R_cal`` (a smaller
+effective radius, from pre-travel, makes the sphere look smaller), and the effective
+radius in each measured direction is ``r + |P_i − C| − R_cal``: that is the probe
+calibration the test produces.  ``POS`` is the ISO 1101 position zone diameter,
+``2 |C − C_nominal|``, as for every kind (docs/results.md).
 """
 
 from __future__ import annotations
@@ -46,6 +48,8 @@ class Characteristic:
         upper: highest allowed deviation, or None.
         u: standard uncertainty of the value, same unit, or None when not estimated
             (``probegen.uncertainty`` says how it is found).
+        method: how a form value was evaluated (``"minimum zone"``, ``"least
+            squares"``), ``""`` for other characteristics.
     """
 
     name: str
@@ -70,6 +74,7 @@ class Characteristic:
     def accepted(self, rule: str = "simple") -> bool | None:
         """The verdict under ``rule`` (``simple``: ``ok``; ``guard_band``: conforming)."""
         return verdict(self.ok, self.decision, rule)
+    method: str = ""
 
     @property
     def ok(self) -> bool | None:
@@ -217,7 +222,8 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
         ball_radius: the radius used for compensation, mm.
         form: limit of P_FTU, or None.
         size: limit of |P_STU|, or None.
-        position: limit of the centre's distance from nominal, or None.
+        position: the diameter of the position zone about the nominal centre (ISO
+            1101: the centre may lie ``position / 2`` from it), or None.
         budget: the stated uncertainty contributions (``budget.radius``: of the radius
             the points were compensated with); default none stated.
         nominal_radius: the nominal ball radius (default ``ball_radius``), mm: the
@@ -234,13 +240,14 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
     p_ftu = float(radial.max() - radial.min())
     p_stu = 2.0 * fit.radius - calibrated_diameter
     dist = float(np.linalg.norm(np.asarray(fit.centre) - np.asarray(nominal_centre)))
+    pos = 2.0 * dist  # ISO 1101: the diameter of the spherical zone holding the centre
     chars = [Characteristic(axis, c, n, c - n) for axis, c, n in
              zip("XYZ", fit.centre, nominal_centre, strict=True)]
     chars += [
-        Characteristic("POS", dist, 0.0, dist, None, position),
+        Characteristic("POS", pos, 0.0, pos, None, position),
         Characteristic("D", 2.0 * fit.radius, calibrated_diameter, p_stu,
                        None if size is None else -size, size),
-        Characteristic("P_FTU", p_ftu, 0.0, p_ftu, None, form),
+        Characteristic("P_FTU", p_ftu, 0.0, p_ftu, None, form, method="least squares"),
         Characteristic("P_STU", p_stu, 0.0, p_stu, None if size is None else -size, size),
         Characteristic("R_EFF", ball_radius + fit.radius - r_cal, r_nom,
                        ball_radius + fit.radius - r_cal - r_nom),
@@ -252,7 +259,7 @@ def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike,
     chars = list(uncertainties(shape, p, np.zeros(len(p), dtype=np.int64), tuple(chars),
                                nominal_centre=np.asarray(nominal_centre, dtype=np.float64),
                                nominal_axis=None, budget=budget or Budget(),
-                               position_factor=1.0))
+                               position_factor=2.0))
     return SphereTestResult(
         feature=feature, fit=fit, points=_tuples(p), directions=_tuples(directions),
         nominal_centre=nominal_centre, calibrated_diameter=calibrated_diameter,

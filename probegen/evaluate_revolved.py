@@ -15,7 +15,10 @@ size is the fitted size offset back by the ball, exactly; compensating each touc
 its *planned* normal instead would leave a cosine error of about ``r·θ²/2`` for a part
 ``θ`` rad off its nominal direction.  The reported contact points are the ball centres
 moved by ``r`` along the fitted surface normals; residuals are the orthogonal distances
-to the fitted offset surface (``+`` away from the axis; a torus: out of the tube).
+to the fitted offset surface, ``+`` where material is outside it (along the outward
+material normal: away from the axis on a boss, towards it in a bore; docs/results.md).
+Every fit starts from the nominal (``geometry.fits_nominal``): other solutions the
+touches admit are named in the result's ``notes``; a fit far from the nominal raises.
 
 Kinds and characteristics (names as in ``results.json``; lengths in mm, angles in
 degrees):
@@ -30,8 +33,9 @@ degrees):
   nominal axis).
 * cone (``fit_cone``, at least two sections): ``X Y Z`` (the fitted axis in the top
   gauge plane), ``POS``, ``ANGLE`` (half angle), per section ``D_Sk`` (the fitted
-  cone's diameter in the gauge plane: the plane through the nominal section centre
-  square to the nominal axis) and ``RON_Sk``, ``FORM`` (conicity); the record holds the
+  cone's diameter in the gauge plane: square to the fitted axis, the top one through
+  the foot of the nominal top section centre on it, the others at their nominal spacing
+  from it) and ``RON_Sk``, ``FORM`` (conicity, least squares); the record holds the
   apex.
 * sphere (``fit_sphere``, touches in at least two sections): ``X Y Z``, ``POS`` (the
   diameter of a spherical zone about the nominal centre), ``D``, ``FORM``.
@@ -41,9 +45,11 @@ degrees):
 
 ``POS`` is the diameter of the position zone: twice the distance of the centre from the
 nominal axis, square to it (ISO 1101); a sphere: twice the distance from the nominal
-centre.  Roundness ``RON_Sk`` is least-squares (Gaussian, ISO 12181 LSCI) peak to
-valley: the ball centres of section ``k`` projected on the plane square to the fitted
-axis, a least-squares circle, the range of its radial residuals (equal to the
+centre.  Roundness ``RON_Sk``, a circle's, cylinder's and sphere's ``FORM`` are by the
+ISO 1101 minimum zone (``geometry.minimum_zone``) or, with ``form_method =
+"least_squares"``, the range of the least-squares residuals (ISO 12181 LSCI); the
+characteristic's ``method`` names it.  ``RON_Sk`` uses the ball centres of section
+``k`` projected on the plane square to the fitted axis (their zone equals the
 surface's: the ball centres lie ``r`` off it along the normal).  Each ``D_Sk`` is
 checked against the ``diameter`` tolerance (every local size within the limits),
 ``RON_Sk`` against ``roundness``, ``TAPER`` against ``±taper``, ``ANGLE`` against
@@ -63,7 +69,9 @@ right for a part placed or tilted far off, and need nothing but the touches.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -74,8 +82,16 @@ from probegen.compensate import ProbeCalibration, calibrated_centres
 from probegen.errors import ProbegenError
 from probegen.evaluate import Characteristic
 from probegen.evaluate_uncertainty import FittedShape, uncertainties
-from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
-from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry import minimum_zone
+from probegen.geometry.fits import (
+    Circle3dFit,
+    ConeFit,
+    CylinderFit,
+    SphereFit,
+    TorusFit,
+    fit_circle_2d,
+)
+from probegen.geometry.fits_nominal import AnyFit, FitCheck, NominalShape, fit_near
 from probegen.geometry.frames import rotation_to_z
 from probegen.uncertainty import Budget
 
@@ -88,7 +104,9 @@ MIN_SECTIONS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 3}
 
 
 class Limits(Protocol):
-    """The tolerances ``evaluate_revolved`` reads (``spec.RevolvedTolerance``)."""
+    """The tolerances ``evaluate_revolved`` reads (``spec.RevolvedTolerance``); an
+    optional ``form_method`` attribute (``"minimum_zone"``, the default, or
+    ``"least_squares"``) chooses how form is evaluated."""
 
     @property
     def diameter(self) -> tuple[float, float] | None: ...
@@ -145,11 +163,14 @@ class RevolvedResult:
         form: roundness, cylindricity, conicity or sphericity, mm.
         points: contact points, mm.
         directions: their fitted outward normals.
-        residuals: residuals, mm (+ away from the axis; a torus: out of the tube).
+        residuals: residuals, mm (+ where material is outside the fitted surface).
         characteristics: the checked quantities.
         half_angle: a cone's fitted half angle, rad, else None.
         apex: a cone's fitted apex, mm, else None.
         major_diameter: a torus's fitted major diameter, mm, else None.
+        notes: what the fit found besides the feature: other solutions the touches
+            admit (``geometry.fits_nominal``; the fit kept the one nearest the nominal).
+        condition: the fit's condition number (``geometry.fits_conditioning``).
     """
 
     feature: str
@@ -165,6 +186,8 @@ class RevolvedResult:
     half_angle: float | None = None
     apex: Vec3 | None = None
     major_diameter: float | None = None
+    notes: tuple[str, ...] = ()
+    condition: float | None = None
 
     @property
     def ok(self) -> bool | None:
@@ -188,6 +211,8 @@ class _Fit:
     half_angle: float | None = None
     apex: Vec3 | None = None
     major_diameter: float | None = None
+    check: FitCheck | None = None
+    form_method: str = minimum_zone.LABELS["least_squares"]
 
 
 def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
@@ -207,8 +232,9 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
             characteristic gets its ``u`` (``probegen.evaluate_uncertainty``).
 
     Raises:
-        ProbegenError: the touches lie in too few sections for the kind, or the fit
-            failed (too few or degenerate points).
+        ProbegenError: the touches lie in too few sections for the kind, the fit
+            failed (too few or degenerate points), or it converged far from the
+            nominal (``geometry.fits_nominal``: not a measurement of this feature).
     """
     c = np.asanyarray(ball_centres, dtype=np.float64).reshape(-1, 3)
     k = np.asanyarray(sections, dtype=np.int64).reshape(-1)
@@ -223,6 +249,9 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         first = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
         c = calibrated_centres(c, -sign * first.normals, cal, ball_radius)
     fit = _FITS[nominal.kind](nominal, c, k, sign * ball_radius, limits)
+    check = fit.check or FitCheck(math.nan)
+    if check.far:
+        raise ProbegenError(f"feature {feature}: {check.far}; not reported as a measurement")
     off = fit.centre - np.asarray(nominal.centre if nominal.kind != "cone" else
                                   nominal.sections[0][0])
     across = off if nominal.kind == "sphere" else off - (off @ v0) * v0
@@ -236,7 +265,8 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
     if nominal.kind != "cone":
         chars.append(_size("D", fit.diameter, nominal.diameter, limits.diameter))
     chars.extend(fit.extra)
-    chars.append(Characteristic("FORM", fit.form, 0.0, fit.form, None, limits.form))
+    chars.append(Characteristic("FORM", fit.form, 0.0, fit.form, None, limits.form,
+                                method=fit.form_method))
     bad = [ch.name for ch in chars if not math.isfinite(ch.measured)]
     if bad or not np.all(np.isfinite(points)):
         raise ProbegenError(f"feature {feature}: expected touches that determine the "
@@ -256,8 +286,11 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
         feature=feature, kind=nominal.kind, centre=_v(fit.centre), axis=_v(fit.axis),
         diameter=fit.diameter, form=fit.form, points=tuple(_v(p) for p in points),
         directions=tuple(_v(n) for n in out_normals),
-        residuals=tuple(float(x) for x in fit.residuals), characteristics=tuple(chars),
-        half_angle=fit.half_angle, apex=fit.apex, major_diameter=fit.major_diameter)
+        residuals=tuple(float(x) for x in -sign * fit.residuals),
+        characteristics=tuple(chars),
+        half_angle=fit.half_angle, apex=fit.apex, major_diameter=fit.major_diameter,
+        notes=tuple(f"feature {feature}: {note}" for note in check.alternatives),
+        condition=check.condition)
 
 
 def _size(name: str, measured: float, nominal: float,
@@ -279,18 +312,29 @@ def _radial(c: Array, centre: Array, axis: Array) -> tuple[Array, Array]:
     return dist, across / dist[:, None]
 
 
+def _near(nominal: Nominal, c: Array, grow: float) -> tuple[AnyFit, FitCheck]:
+    """The fit of the ball centres started from the nominal (``fits_nominal``)."""
+    radius = max(nominal.diameter / 2.0 - grow, 0.0)
+    axis = None if nominal.kind == "sphere" else nominal.axis
+    return fit_near(c, NominalShape(nominal.kind, axis, radius, nominal.half_angle, grow))
+
+
 def _circle(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_circle_3d(c)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, Circle3dFit)
     centre = np.asarray(fit.centre)
     axis = _signed(np.asarray(fit.normal), np.asarray(nominal.axis))
     dist, outward = _radial(c, centre, axis)
     res = dist - fit.radius
-    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
-                outward)
+    in_plane = ((c - centre) @ rotation_to_z(axis).T)[:, :2]
+    form, method = _form(limits, res, lambda: minimum_zone.roundness(in_plane, (0.0, 0.0)))
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), form, res, outward, check=check,
+                form_method=method)
 
 
 def _cylinder(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_cylinder(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, CylinderFit)
     v0 = np.asarray(nominal.axis)
     axis = _signed(np.asarray(fit.axis), v0)
     point = np.asarray(fit.point)
@@ -303,8 +347,9 @@ def _cylinder(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limi
     t = limits.taper
     extra += (Characteristic("TAPER", taper, 0.0, taper, None if t is None else -t, t),
               _size("TILT", _degrees(axis, v0), 0.0, None))
-    return _Fit(centre, axis, 2.0 * (fit.radius + grow), float(res.max() - res.min()), res,
-                outward, extra)
+    form, method = _form(limits, res, lambda: minimum_zone.cylindricity(c, centre, axis))
+    return _Fit(centre, axis, 2.0 * (fit.radius + grow), form, res, outward, extra,
+                check=check, form_method=method)
 
 
 def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
@@ -326,25 +371,43 @@ def _sections(nominal: Nominal, c: Array, k: IntArray, axis: Array, grow: float,
         local = (c[k == j] - point) @ frame.T
         rho = np.hypot(local[:, 0], local[:, 1])
         scale = (rho - slope * (local[:, 2] - local[:, 2].mean())) / rho
-        circle = fit_circle_2d(local[:, :2] * scale[:, None])
+        flat = local[:, :2] * scale[:, None]
+        circle = fit_circle_2d(flat)
+        ron, method = _form(limits, np.asarray(circle.residuals),
+                            functools.partial(minimum_zone.roundness, flat, circle.centre))
         d = 2.0 * (circle.radius + grow) if gauge is None else gauge[j]
         diameters.append(d)
         heights.append(float(np.mean(local[:, 2])))
         out.append(_size(f"D_S{j + 1}", d, nominal.sections[j][1], limits.diameter))
-        out.append(Characteristic(f"RON_S{j + 1}", circle.form, 0.0, circle.form, None,
-                                  limits.roundness))
+        out.append(Characteristic(f"RON_S{j + 1}", ron, 0.0, ron, None, limits.roundness,
+                                  method=method))
     return tuple(out), np.asarray(diameters), np.asarray(heights)
 
 
+def _form(limits: Limits, residuals: Array, zone: Callable[[], float]) -> tuple[float, str]:
+    """The form value by the feature's ``form_method`` and the method's name: the
+    minimum zone (``zone()``) or the range of the least-squares ``residuals``."""
+    if getattr(limits, "form_method", "minimum_zone") == "least_squares":
+        return float(residuals.max() - residuals.min()), minimum_zone.LABELS["least_squares"]
+    return zone(), minimum_zone.LABELS["minimum_zone"]
+
+
 def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_cone(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, ConeFit)
     alpha = fit.half_angle
     axis, point = np.asarray(fit.axis), np.asarray(fit.point)
     v0 = np.asarray(nominal.axis)
     shift = grow / math.cos(alpha)  # surface section radius = ball cone's + shift
 
+    top_centre = np.asarray(nominal.sections[0][0])
+    top_t = float((top_centre - point) @ axis)  # the top centre's foot on the fitted axis
+
     def at_gauge(centre: Vec3) -> tuple[Array, float]:
-        t = float((np.asarray(centre) - point) @ v0) / float(axis @ v0)
+        """Gauge point and diameter: square to the fitted axis, the nominal spacing of
+        the sections kept along it from the top one (the part frame follows the
+        feature: a part moved or tilted about its top gauge point reads the same)."""
+        t = top_t + float((np.asarray(centre) - top_centre) @ v0)
         return point + t * axis, 2.0 * (fit.radius + t * math.tan(alpha) + shift)
 
     gauges = [at_gauge(centre) for centre, _ in nominal.sections]
@@ -360,21 +423,23 @@ def _cone(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) 
     normals = math.cos(alpha) * e - math.sin(alpha) * axis[None, :]
     res = np.asarray(fit.residuals)
     return _Fit(top, axis, gauges[0][1], float(res.max() - res.min()), res, normals,
-                (ang, *extra), alpha, _v(apex))
+                (ang, *extra), alpha, _v(apex), check=check)
 
 
 def _sphere(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_sphere(c)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, SphereFit)
     centre = np.asarray(fit.centre)
     rel = c - centre
     res = np.asarray(fit.residuals)
-    return _Fit(centre, np.asarray(nominal.axis), 2.0 * (fit.radius + grow),
-                float(res.max() - res.min()), res,
-                rel / np.linalg.norm(rel, axis=1)[:, None])
+    form, method = _form(limits, res, lambda: minimum_zone.sphericity(c, centre))
+    return _Fit(centre, np.asarray(nominal.axis), 2.0 * (fit.radius + grow), form, res,
+                rel / np.linalg.norm(rel, axis=1)[:, None], check=check, form_method=method)
 
 
 def _torus(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits) -> _Fit:
-    fit = fit_torus(c, axis=nominal.axis)
+    fit, check = _near(nominal, c, grow)
+    assert isinstance(fit, TorusFit)
     centre = np.asarray(fit.centre)
     axis = _signed(np.asarray(fit.axis), np.asarray(nominal.axis))
     _, e = _radial(c, centre, axis)
@@ -384,7 +449,7 @@ def _torus(nominal: Nominal, c: Array, k: IntArray, grow: float, limits: Limits)
     return _Fit(centre, axis, 2.0 * (fit.minor_radius + grow), float(res.max() - res.min()),
                 res, tube / np.linalg.norm(tube, axis=1)[:, None],
                 (_size("DMAJ", dmaj, nominal.major_diameter, None),),
-                major_diameter=dmaj)
+                major_diameter=dmaj, check=check)
 
 
 _FITS = {"circle": _circle, "cylinder": _cylinder, "cone": _cone, "sphere": _sphere,

@@ -500,6 +500,9 @@ def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[s
         limits=feature.tolerance, budget=budget))
     if isinstance(outcome, NotEvaluated) and outcome.partial is None:
         notes.append(f"feature {feature.id}: not evaluated: {outcome.reason}")
+    found_fit = outcome.partial if isinstance(outcome, NotEvaluated) else outcome
+    if isinstance(found_fit, RevolvedResult):
+        notes.extend(found_fit.notes)  # other solutions the touches admit
     return outcome
 
 
@@ -607,7 +610,7 @@ def _not_evaluated_json(n: NotEvaluated, rule: str) -> dict[str, Any]:
         {"name": name, "measured": _opt_f(measured), "nominal": _opt_f(nominal),
          "deviation": _opt_f(deviation), "lower": _opt_f(lower), "upper": _opt_f(upper),
          "ok": None, "status": status, "u": _opt_f(u), "U": _opt_f(big_u), "decision": None}
-        for name, measured, nominal, deviation, lower, upper, status, u, big_u, _
+        for name, measured, nominal, deviation, lower, upper, status, u, big_u, _, _
         in _rows_of(n, rule)]
     return _after_ok({**doc, "ok": None}, status=NOT_EVALUATED, reason=n.reason)
 
@@ -626,9 +629,9 @@ def _opt_f(x: float | None) -> float | None:
 
 
 Row = tuple[str, float | None, float | None, float | None, float | None, float | None, str,
-            float | None, float | None, str | None]
+            float | None, float | None, str | None, str]
 """A characteristic as the outputs list it: name, measured, nominal, deviation, lower,
-upper, status, u, U, decision (ISO 14253-1)."""
+upper, status, u, U, decision (ISO 14253-1), method (of a form value, else "")."""
 
 
 def _rows_of(r: Evaluated | NotEvaluated, rule: str) -> list[Row]:
@@ -637,14 +640,14 @@ def _rows_of(r: Evaluated | NotEvaluated, rule: str) -> list[Row]:
     toleranced characteristics without values."""
     if not isinstance(r, NotEvaluated):
         return [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
-                 status_of(c.accepted(rule)), c.u, c.U, c.decision)
+                 status_of(c.accepted(rule)), c.u, c.U, c.decision, c.method)
                 for c in r.characteristics]
     chars = () if r.partial is None else r.partial.characteristics
     rows: list[Row] = [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
-                        "-" if c.ok is None else NOT_EVALUATED, c.u, c.U, None)
+                        "-" if c.ok is None else NOT_EVALUATED, c.u, c.U, None, c.method)
                        for c in chars]
     shown = {c.name for c in chars}
-    rows += [(name, None, None, None, lo, hi, NOT_EVALUATED, None, None, None)
+    rows += [(name, None, None, None, lo, hi, NOT_EVALUATED, None, None, None, "")
              for name, (lo, hi) in zip(r.characteristics, r.limits, strict=True)
              if name not in shown]
     return rows
@@ -670,7 +673,7 @@ def _measured_json(characteristics: Any, points: Any, directions: Any,
              "deviation": _f(c.deviation), "lower": _opt_f(c.lower),
              "upper": _opt_f(c.upper), "ok": c.accepted(rule),
              "status": status_of(c.accepted(rule)), "u": _opt_f(c.u), "U": _opt_f(c.U),
-             "decision": c.decision}
+             "decision": c.decision, **({"method": c.method} if c.method else {})}
             for c in characteristics
         ],
         "points": [[_f(v) for v in p] for p in points],
@@ -707,6 +710,9 @@ def _revolved_json(r: RevolvedResult, rule: str) -> dict[str, Any]:
         **({} if r.half_angle is None else {"half_angle_deg": _f(math.degrees(r.half_angle))}),
         **({} if r.apex is None else {"apex": [_f(v) for v in r.apex]}),
         **({} if r.major_diameter is None else {"major_diameter": _f(r.major_diameter)}),
+        # how well the touches determine the fit (geometry.fits_conditioning), 4 digits
+        **({} if r.condition is None or not math.isfinite(r.condition)
+           else {"condition": float(f"{r.condition:.4g}")}),
         **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
     }
 
@@ -749,7 +755,7 @@ def _all_rows(ing: Ingested) -> list[tuple[str, Row]]:
     features: list[Evaluated | NotEvaluated] = [*ing.evaluated, *ing.not_evaluated]
     for r in features:
         rows = _rows_of(r, ing.rule) or [
-            ("-", None, None, None, None, None, NOT_EVALUATED, None, None, None)]
+            ("-", None, None, None, None, None, NOT_EVALUATED, None, None, None, "")]
         out += [(r.feature, row) for row in rows]
     return out
 
@@ -763,13 +769,13 @@ def to_csv(ing: Ingested) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
-                "upper", "status", "u", "U", "decision", "calibration"])
+                "upper", "status", "u", "U", "decision", "calibration", "method"])
     for feature, (name, measured, nominal, deviation, lo, hi, status, u, big_u,
-                  decision) in _all_rows(ing):
+                  decision, method) in _all_rows(ing):
         w.writerow([feature, name, _num(measured, ".4f"), _num(nominal, ".4f"),
                     _num(deviation, ".4f"), _num(lo, ".4f"), _num(hi, ".4f"), status,
                     _num(u, ".5f"), _num(big_u, ".4f"), decision or "",
-                    ing.calibration_text])
+                    ing.calibration_text, method])
     return buf.getvalue()
 
 
@@ -777,12 +783,12 @@ def to_table(ing: Ingested) -> str:
     """The table ``probegen ingest`` prints, each NOT EVALUATED feature's reason and
     the run's status."""
     rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status",
-             "U", "decision")]
+             "U", "decision", "method")]
     for feature, (name, measured, nominal, deviation, lo, hi, status, _, big_u,
-                  decision) in _all_rows(ing):
+                  decision, method) in _all_rows(ing):
         rows.append((feature, name, _num(measured, ".4f") or "-", _num(nominal, ".4f") or "-",
                      _num(deviation, "+.4f") or "-", _tol(lo, hi), status,
-                     _num(big_u, ".4f") or "-", decision or "-"))
+                     _num(big_u, ".4f") or "-", decision or "-", method))
     text = f"probe: {ing.calibration_text}\n" + _columns(rows)
     text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
              f"{ing.rule} (ISO 14253-1)\n")

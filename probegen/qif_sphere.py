@@ -7,8 +7,8 @@ normals, ``Compensated`` true and the ``ProbeRadius`` they were compensated with
 ``SphereFeatureMeasurement`` (fitted centre, diameter, form = ``P_FTU``; ``P_FTU``,
 ``P_STU`` and ``R_EFF`` also as attributes).  Characteristics: the spherical diameter
 always (measured only when the spec gives no ``size`` limit), the sphericity when
-``form`` is toleranced and the position when ``position`` is (QIF positions are zone
-diameters: the limit and the deviation are written doubled, see ``docs/qif.md``).
+``form`` is toleranced and the position when ``position`` is (a zone diameter, as QIF
+and probegen's ``POS`` both state it, see ``docs/qif.md``).
 """
 
 from __future__ import annotations
@@ -219,10 +219,10 @@ def _checks(r: SphereTestResult, rule: str, evaluated: bool = True) -> list[Chec
 
 
 def _position(feature: str, pos: Characteristic, rule: str, evaluated: bool) -> list[Check]:
-    """The position check, as a spherical zone diameter (twice the centre distance)."""
+    """The position check: ``POS`` and its limit are already spherical zone diameters
+    (twice the centre distance)."""
     if pos.upper is None:
         return []
-    return [Check("Position", f"{feature} POS", 2.0 * pos.measured,
-                  status(pos.accepted(rule), evaluated=evaluated), zone=2.0 * pos.upper,
-                  zone_shape="SphericalZone", material="NONE",
-                  u=None if pos.u is None else 2.0 * pos.u)]
+    return [Check("Position", f"{feature} POS", pos.measured,
+                  status(pos.accepted(rule), evaluated=evaluated), zone=pos.upper,
+                  zone_shape="SphericalZone", material="NONE", u=pos.u)]

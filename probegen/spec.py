@@ -19,6 +19,7 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
 
     [evaluation]                   # optional
     decision_rule = "simple"       # simple | guard_band (ISO 14253-1, docs/results.md)
+    form_method = "minimum_zone"   # minimum_zone (ISO 1101) | least_squares
 
     [[feature]]
     id = "SPH1"                    # [A-Z][A-Z0-9]{0,11}, unique
@@ -41,6 +42,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     points = 8                     # per section
     retract = 2.0                  # optional; the M2 safe distance
     tolerance = { diameter = [0.0, 0.025], position = 0.05, form = 0.01 }
+    # position: the zone diameter; form_method = "least_squares" in the tolerance
+    # table overrides [evaluation] for this feature
 
     [[feature]]                    # a free-form face (method M3)
     id = "SURF"
@@ -72,6 +75,9 @@ from probegen.machine.profile import MachineProfile, load_profile
 from probegen.spec_actions import PLANAR_KINDS, Actions, PlanarSpec, read_actions, read_planar
 from probegen.tomlread import Table, load_toml
 from probegen.uncertainty import DECISION_RULES
+
+FORM_METHODS = ("minimum_zone", "least_squares")
+"""Values of ``form_method`` (``geometry.minimum_zone``)."""
 
 Vec3 = tuple[float, float, float]
 
@@ -108,7 +114,8 @@ class SphereTolerance:
     Attributes:
         form: limit of the probing form error P_FTU (range of radial residuals).
         size: limit of |P_STU|, the fitted diameter's deviation from the calibrated one.
-        position: limit of the fitted centre's distance from the nominal centre.
+        position: the diameter of the position zone about the nominal centre (ISO 1101:
+            the fitted centre may lie ``position / 2`` from it).
     """
 
     form: float | None = None
@@ -169,6 +176,10 @@ class RevolvedTolerance:
             sections (cylinder).
         angle: lowest and highest allowed deviation of a cone's half angle, degrees
             (never scaled by the spec's units).
+        form_method: how form (``form``, ``roundness``) is evaluated: ``minimum_zone``
+            (ISO 1101, the default) or ``least_squares`` (the range of the residuals
+            about the least-squares fit); the feature's ``form_method`` key, else
+            ``[evaluation] form_method``.
     """
 
     diameter: tuple[float, float] | None = None
@@ -177,6 +188,7 @@ class RevolvedTolerance:
     roundness: float | None = None
     taper: float | None = None
     angle: tuple[float, float] | None = None
+    form_method: str = "minimum_zone"
 
 
 @dataclass(frozen=True, slots=True)
@@ -291,6 +303,7 @@ def load_spec(path: str | Path) -> Spec:
     m = root.table("machine", required=True)
     machine = _machine(m, base)
     prog = root.table("program")
+    evaluation = _evaluation(root.table("evaluation"))
     spec = Spec(
         source=file,
         model=base / model_name if model_name else None,
@@ -299,8 +312,8 @@ def load_spec(path: str | Path) -> Spec:
         clearance_z=_clearance(m, machine, k),
         program_number=prog.get_int("number", 1001, minimum=1, maximum=9999) or 1001,
         program_name=_program_name(prog),
-        features=_features(root, k),
-        decision_rule=_decision_rule(root.table("evaluation")),
+        features=_features(root, k, evaluation[1]),
+        decision_rule=evaluation[0],
     )
     m.done()
     prog.done()
@@ -308,10 +321,13 @@ def load_spec(path: str | Path) -> Spec:
     return spec
 
 
-def _decision_rule(t: Table) -> str:
+def _evaluation(t: Table) -> tuple[str, str]:
+    """``[evaluation]``: the decision rule (ISO 14253-1) and the default form method of
+    every feature (minimum zone, ISO 1101)."""
     rule = t.get_str("decision_rule", "simple", choices=DECISION_RULES) or "simple"
+    method = t.get_str("form_method", "minimum_zone", choices=FORM_METHODS) or "minimum_zone"
     t.done()
-    return rule
+    return rule, method
 
 
 def _machine(t: Table, base: Path) -> MachineProfile:
@@ -345,11 +361,11 @@ def _program_name(t: Table) -> str:
     return name
 
 
-def _features(root: Table, k: float) -> tuple[Feature, ...]:
+def _features(root: Table, k: float, form_method: str) -> tuple[Feature, ...]:
     tables = root.tables("feature")
     if not tables:
         raise SpecError(f"{root.file}: feature: expected at least one [[feature]], found none")
-    features = tuple(_feature(t, k) for t in tables)
+    features = tuple(_feature(t, k, form_method) for t in tables)
     seen: set[str] = set()
     for t, f in zip(tables, features, strict=True):
         if f.id in seen:
@@ -358,7 +374,7 @@ def _features(root: Table, k: float) -> tuple[Feature, ...]:
     return features
 
 
-def _feature(t: Table, k: float) -> Feature:
+def _feature(t: Table, k: float, form_method: str = "minimum_zone") -> Feature:
     fid = t.get_str("id", required=True) or ""
     if not _ID.match(fid):
         raise t.fail("id", "an id of 1-12 upper-case letters and digits, starting with a letter")
@@ -374,7 +390,7 @@ def _feature(t: Table, k: float) -> Feature:
     elif kind in PLANAR_KINDS:
         feature = read_planar(t, fid, kind, k)
     else:
-        feature = _revolved(t, fid, kind, k)
+        feature = _revolved(t, fid, kind, k, form_method)
     t.done()
     return feature
 
@@ -444,7 +460,7 @@ def _face_or_at(t: Table, k: float) -> tuple[int | None, Vec3 | None]:
     return face, at
 
 
-def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
+def _revolved(t: Table, fid: str, kind: str, k: float, form_method: str) -> RevolvedSpec:
     face, at = _face_or_at(t, k)
     sections = _depths(t, k)
     if kind == "circle" and sections is not None and len(sections) != 1:
@@ -454,7 +470,7 @@ def _revolved(t: Table, fid: str, kind: str, k: float) -> RevolvedSpec:
     return RevolvedSpec(
         id=fid, where=f"{t.file}: {t.path}", kind=kind, face=face, at=at, sections=sections,
         points=points, retract=None if retract is None else retract * k,
-        tolerance=_revolved_tolerance(t.table("tolerance"), k),
+        tolerance=_revolved_tolerance(t.table("tolerance"), k, form_method),
         actions=read_actions(t, k, "XY"),
     )
 
@@ -471,14 +487,15 @@ def _depths(t: Table, k: float) -> tuple[float, ...] | None:
     return tuple(float(v) * k for v in value)
 
 
-def _revolved_tolerance(t: Table, k: float) -> RevolvedTolerance:
+def _revolved_tolerance(t: Table, k: float, form_method: str) -> RevolvedTolerance:
     diameter = t.get_limits("diameter", k)
     angle = t.get_limits("angle", unit=" in degrees")
     values = {key: t.get_float(key, positive=True)
               for key in ("position", "form", "roundness", "taper")}
+    method = t.get_str("form_method", form_method, choices=FORM_METHODS) or form_method
     t.done()
-    return RevolvedTolerance(diameter, angle=angle, **{key: None if v is None else v * k
-                                                       for key, v in values.items()})
+    return RevolvedTolerance(diameter, angle=angle, form_method=method,
+                             **{key: None if v is None else v * k for key, v in values.items()})
 
 
 def _freeform(t: Table, fid: str, k: float) -> FreeformSpec:

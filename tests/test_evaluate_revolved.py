@@ -36,6 +36,9 @@ class Limits:
     roundness: float | None = 0.003
     taper: float | None = 0.005
     angle: tuple[float, float] | None = (-0.05, 0.05)
+    # the exact values below are least-squares ranges (ptp of the sampled lobes);
+    # test_minimum_zone.py checks the default, the minimum zone
+    form_method: str = "least_squares"
 
 
 def chars(result: object) -> dict[str, object]:

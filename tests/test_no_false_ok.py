@@ -257,7 +257,7 @@ def test_run_status_rule() -> None:
 
 def test_qif_marks_a_partial_sphere_not_analyzed(tmp_path: Path) -> None:
     cut = tuple(f"PT SPH1 {k} " for k in range(20, 26)) + ("PGEND",)
-    spec = sphere_spec(tmp_path, tolerance="tolerance = { form = 0.01, position = 2.0 }\n")
+    spec = sphere_spec(tmp_path, tolerance="tolerance = { form = 0.01, position = 4.0 }\n")
     target = tmp_path / "r.qif"
     assert main(["qif", str(edited_log(tmp_path, drop=cut)), "--spec", str(spec),
                  "-o", str(target), "--validate", "--schema",

@@ -71,14 +71,16 @@ def scene(html: str, element_id: str) -> dict[str, Any]:
 # -- content ----------------------------------------------------------------------------
 
 def test_summary_table_holds_the_values(page: str) -> None:
-    rows = re.findall(r"<tr class=\"(\w+)\"><th scope=\"row\">(\w+)</th>((?:<td[^>]*>[^<]*</td>)+)",
-                      page)
+    rows = re.findall(r"<tr class=\"(\w+)\"><th scope=\"row\">(\w+)(?: <small>[^<]*</small>)?"
+                      r"</th>((?:<td[^>]*>[^<]*</td>)+)", page)
     cells = {name: re.findall(r">([^<]*)</td>", tds) for _, name, tds in rows}
     assert list(cells) == ["X", "Y", "Z", "POS", "D", "P_FTU", "P_STU", "R_EFF"]
     assert cells["D"][:3] == ["24.9992", "25.0000", "-0.0008"]
     assert cells["X"][:3] == ["0.8000", "0.0000", "+0.8000"]
     assert cells["R_EFF"][:3] == ["2.9996", "3.0000", "-0.0004"]
     assert all(cls == "none" for cls, _, _ in rows)
+    # the form value names its method (ISO 10360-5's P_FTU is least squares)
+    assert '<th scope="row">P_FTU <small>least squares</small></th>' in page
 
 
 def test_tolerances_colour_the_status(results: dict[str, Any]) -> None:
@@ -89,7 +91,8 @@ def test_tolerances_colour_the_status(results: dict[str, Any]) -> None:
     doc["features"][0].update(ok=False, status="NOT OK")
     doc["status"] = "NOT OK"
     html = render_report(doc)
-    assert re.search(r'<tr class="nok"><th scope="row">P_FTU</th>.*?NOT OK</td>', html)
+    assert re.search(r'<tr class="nok"><th scope="row">P_FTU <small>least squares</small></th>'
+                     r'.*?NOT OK</td>', html)
     assert re.search(r'<tr class="ok"><th scope="row">D</th>.*?-0.0020 / \+0.0020.*?OK</td>',
                      html)
     assert '<span class="badge nok">NOT OK</span>' in html

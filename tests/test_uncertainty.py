@@ -89,7 +89,7 @@ def test_stated_u_covers_the_truth_95_percent() -> None:
     rng = np.random.default_rng(20261126)
     truth = {"X": 50.04, "Y": 39.97, "D": D_TRUE, "D_S2": D_TRUE,
              "POS": 2 * math.hypot(0.04, 0.03)}
-    sphere_truth = {"X": 1.0, "Y": 2.0, "Z": 3.0, "D": 25.0, "POS": math.sqrt(14.0)}
+    sphere_truth = {"X": 1.0, "Y": 2.0, "Z": 3.0, "D": 25.0, "POS": 2 * math.sqrt(14.0)}
     hits = {f"bore {k}": 0 for k in truth} | {f"sphere {k}": 0 for k in sphere_truth}
     for _ in range(REPEATS):
         r_true = R_BALL + rng.normal(0.0, U_RADIUS)
@@ -214,7 +214,7 @@ def test_stated_contributions_reach_every_output(tmp_path: Path,
                  str(tmp_path), "--write-calibration", str(cal)]) == ExitCode.OK
     out = capsys.readouterr().out
     header = next(line for line in out.splitlines() if line.startswith("feature"))
-    assert header.split()[-2:] == ["U", "decision"]
+    assert header.split()[-3:] == ["U", "decision", "method"]
     assert "was not stated" not in out
     doc = json.loads((tmp_path / "results.json").read_text())
     assert doc["uncertainty"] == {"k": 2.0, "decision_rule": "simple", "u_radius": 0.0,

@@ -18,11 +18,11 @@ centres the CMM recorded.  Stylus compensation, two modes:
   nominal surface normal) and fit those points; exact only where the real surface
   normal equals the nominal one (an error of ``r (1 - cos t)`` for a tilt ``t``).
 
-Points and lines are always vector compensated.  Cylinders are fitted from the
-nominal axis (:mod:`probegen.dmisrun.fitting`: sparse CMM patterns fit several
-cylinders exactly), tori with the nominal axis as one more start
-(:func:`~probegen.geometry.fits.fit_torus`); the other shapes use
-:mod:`probegen.geometry.fits` as they are.
+Points and lines are always vector compensated.  Circles, cylinders, spheres, cones and
+tori are fitted from the nominal (:func:`probegen.geometry.fits_nominal.fit_near`:
+sparse CMM patterns fit several cylinders within the noise; the fit keeps the one
+nearest the nominal, names the others in the actual's ``notes`` and refuses a
+solution far from the nominal).
 
 The actual's reported location: the fitted centre for circles, spheres and tori, the apex
 for cones, and for unbounded features (plane, cylinder axis, line) the nominal
@@ -39,17 +39,18 @@ from typing import Literal
 
 import numpy as np
 
-from probegen.dmisrun.fitting import cylinder_near
+from probegen.errors import ProbegenError
+from probegen.geometry import minimum_zone
 from probegen.geometry.fits import (
-    fit_circle_3d,
-    fit_cone,
-    fit_cylinder,
+    Circle3dFit,
+    CylinderFit,
+    SphereFit,
+    TorusFit,
     fit_line_3d,
     fit_plane,
-    fit_sphere,
-    fit_torus,
 )
-from probegen.geometry.frames import FloatArray, unit
+from probegen.geometry.fits_nominal import NominalShape, fit_near
+from probegen.geometry.frames import FloatArray, orthonormal_basis, unit
 
 Vec3 = tuple[float, float, float]
 Compensation = Literal["feature", "vector"]
@@ -80,10 +81,14 @@ class DmisFeature:
         length: cylinder length, None if not given.
         end: end point of a bounded line.
         normal: the line's plane normal (``LINE`` with a third vector).
-        form: actual only: flatness, roundness, cylindricity, sphericity, conicity or
-            straightness from the fit residuals (a torus: the fit's ``max - min``
-            residual).
+        form: actual only: flatness, roundness, cylindricity, sphericity or
+            straightness by the ISO 1101 minimum zone (``geometry.minimum_zone``); a
+            cone's conicity and a torus's form: the least-squares ``max - min`` residual.
         points: actual only: the compensated contact points, ``(n, 3)`` as tuples.
+        notes: actual only: what the fit found besides the feature (another solution
+            the points admit: :mod:`probegen.geometry.fits_nominal`).
+        condition: actual only: the fit's condition number, None where not fitted
+            iteratively.
     """
 
     name: str
@@ -98,6 +103,8 @@ class DmisFeature:
     normal: Vec3 | None = None
     form: float | None = None
     points: tuple[Vec3, ...] = ()
+    notes: tuple[str, ...] = ()
+    condition: float | None = None
 
 
 def vec3(array: FloatArray) -> Vec3:
@@ -232,70 +239,72 @@ def _fit_plane(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
     side = 1.0 if float(vectors.sum(axis=0) @ n) >= 0.0 else -1.0
     point = arr(fit.point) - side * radius * n
     return replace(nominal, location=_onto_plane(arr(nominal.location), point, n),
-                   vector=vec3(n), form=fit.form)
+                   vector=vec3(n), form=minimum_zone.flatness(centres, fit.point, fit.normal))
 
 
 def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) -> DmisFeature:
-    """Circle, cylinder, sphere, cone or torus through ball centres, offset by ``radius``."""
+    """Circle, cylinder, sphere, cone or torus through ball centres, offset by ``radius``.
+
+    The fit starts from the nominal (:func:`~probegen.geometry.fits_nominal.fit_near`):
+    another solution the points admit goes into ``notes``; a solution far from the
+    nominal is refused (a ProbegenError), never reported as the feature."""
     grow = radius if nominal.qualifier == "INNER" else -radius
-    if nominal.kind == "CIRCLE":
-        circle = fit_circle_3d(centres)
-        return replace(nominal, location=circle.centre, size=2.0 * (circle.radius + grow),
-                       vector=vec3(signed_like(arr(circle.normal), nominal.vector)),
-                       form=circle.form)
-    if nominal.kind == "SPHERE":
-        sphere = fit_sphere(centres)
-        return replace(nominal, location=sphere.centre, size=2.0 * (sphere.radius + grow),
-                       form=sphere.form)
-    if nominal.kind == "CYLNDR":
-        return _fit_cylinder(nominal, centres, grow)
-    if nominal.kind == "TORUS":
-        return _fit_torus(nominal, centres, grow)
-    return _fit_cone(nominal, centres, grow)
-
-
-SEED_SLACK = 1e-9
-"""The fit started from the nominal axis is kept unless the unseeded fit's rms is lower
-by more than this (mm): among equally good cylinders the CMM reports the nominal one."""
-
-
-def _fit_cylinder(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
-    cyl = fit_cylinder(centres)
-    point, axis, radius, form = arr(cyl.point), arr(cyl.axis), cyl.radius, cyl.form
-    seeded = cylinder_near(centres, arr(nominal.vector or cyl.axis))
-    if seeded is not None and seeded.rms <= cyl.rms + SEED_SLACK:
-        point, axis, radius, form = seeded.point, seeded.axis, seeded.radius, seeded.form
-    axis = signed_like(axis, nominal.vector)
-    location = _onto_line(arr(nominal.location), point, axis)
-    return replace(nominal, location=vec3(location), vector=vec3(axis),
-                   size=2.0 * (radius + grow), form=form)
-
-
-def _fit_cone(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
-    """Cone through ball centres; the apex moves ``grow / sin(half angle)`` towards the
-    narrow end (INNER, ``grow > 0``) or the wide end (OUTER)."""
-    cone = fit_cone(centres)
-    opening = arr(cone.axis)  # points to increasing radius
-    apex = arr(cone.apex) - (grow / math.sin(cone.half_angle)) * opening
+    fit, check = fit_near(centres, _nominal_shape(nominal, grow))
+    if check.far:
+        raise ProbegenError(f"{check.far}; not reported as a measurement")
+    notes, condition = check.alternatives, check.condition
+    if isinstance(fit, Circle3dFit):
+        in_plane = (centres - arr(fit.centre)) @ orthonormal_basis(arr(fit.normal))[:2].T
+        return replace(nominal, location=fit.centre, size=2.0 * (fit.radius + grow),
+                       vector=vec3(signed_like(arr(fit.normal), nominal.vector)),
+                       form=minimum_zone.roundness(in_plane, (0.0, 0.0)), notes=notes,
+                       condition=condition)
+    if isinstance(fit, SphereFit):
+        return replace(nominal, location=fit.centre, size=2.0 * (fit.radius + grow),
+                       form=minimum_zone.sphericity(centres, fit.centre), notes=notes,
+                       condition=condition)
+    if isinstance(fit, CylinderFit):
+        axis = signed_like(arr(fit.axis), nominal.vector)
+        location = _onto_line(arr(nominal.location), arr(fit.point), axis)
+        return replace(nominal, location=vec3(location), vector=vec3(axis),
+                       size=2.0 * (fit.radius + grow),
+                       form=minimum_zone.cylindricity(centres, fit.point, fit.axis),
+                       notes=notes, condition=condition)
+    if isinstance(fit, TorusFit):
+        # the ball centres lie on a torus with the same centre circle, tube -grow larger
+        return replace(nominal, location=fit.centre,
+                       vector=vec3(signed_like(arr(fit.axis), nominal.vector)),
+                       size=2.0 * fit.major_radius, minor=2.0 * (fit.minor_radius + grow),
+                       form=fit.form, notes=notes, condition=condition)
+    # a cone: the apex moves grow / sin(half angle) towards the narrow end (INNER,
+    # grow > 0) or the wide end (OUTER)
+    opening = arr(fit.axis)  # points to increasing radius
+    apex = arr(fit.apex) - (grow / math.sin(fit.half_angle)) * opening
     return replace(nominal, location=vec3(apex),
                    vector=vec3(signed_like(opening, nominal.vector)),
-                   size=math.degrees(2.0 * cone.half_angle), form=cone.form)
+                   size=math.degrees(2.0 * fit.half_angle), form=fit.form, notes=notes,
+                   condition=condition)
 
 
-def _fit_torus(nominal: DmisFeature, centres: FloatArray, grow: float) -> DmisFeature:
-    """Torus through ball centres, started from the nominal axis as well; the ball
-    centres lie on a torus with the same centre circle and the tube ``-grow`` larger."""
-    torus = fit_torus(centres, axis=nominal.vector)
-    return replace(nominal, location=torus.centre,
-                   vector=vec3(signed_like(arr(torus.axis), nominal.vector)),
-                   size=2.0 * torus.major_radius, minor=2.0 * (torus.minor_radius + grow),
-                   form=torus.form)
+_SHAPES = {"CIRCLE": "circle", "CYLNDR": "cylinder", "SPHERE": "sphere", "CONE": "cone",
+           "TORUS": "torus"}
+
+
+def _nominal_shape(nominal: DmisFeature, grow: float) -> NominalShape:
+    """The nominal of the surface the ball centres lie on (``grow`` inside it)."""
+    kind = _SHAPES[nominal.kind]
+    if kind == "cone":
+        return NominalShape(kind, nominal.vector, 0.0, math.radians((nominal.size or 0.0) / 2),
+                            grow)
+    size = nominal.minor if kind == "torus" else nominal.size
+    return NominalShape(kind, nominal.vector, max((size or 0.0) / 2.0 - grow, 0.0), 0.0, grow)
 
 
 def _fit_line(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
     fit = fit_line_3d(points)
     d = signed_like(arr(fit.direction), nominal.vector)
-    return _line_actual(nominal, arr(fit.point), d, fit.form)
+    return _line_actual(nominal, arr(fit.point), d,
+                        minimum_zone.straightness_3d(points, fit.point, fit.direction))
 
 
 def _line_actual(nominal: DmisFeature, point: FloatArray, direction: FloatArray,

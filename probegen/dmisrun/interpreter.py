@@ -39,6 +39,7 @@ Conventions (details in the modules named):
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
@@ -468,6 +469,7 @@ def do_output(state: VmState, st: Statement) -> None:
         if ref.kind == "FA":
             last = state.actual(ref.name)
             texts.append(feature_text("FA", last, state.frame, state.scale))
+            texts.extend(_comment(f"FA({last.name}) warning: {note}") for note in last.notes)
         elif ref.kind == "F":
             texts.append(feature_text("F", state.nominal(ref.name), state.frame,
                                       state.scale))
@@ -476,6 +478,11 @@ def do_output(state: VmState, st: Statement) -> None:
     state.emit(echo(st))
     for text in texts:
         state.emit(text)
+
+
+def _comment(text: str) -> str:
+    """``text`` as DMIS comment lines (``$$ ...``) of at most 80 characters."""
+    return "\n".join(f"$$ {line}" for line in textwrap.wrap(text, width=77))
 
 
 def _tolerance_for(state: VmState, name: str, feature: DmisFeature | None

@@ -43,6 +43,7 @@ from probegen.geometry.fits_solver import (
     jacobian_at,
     multi_start,
     normalise,
+    polish,
     require_rank,
     step_tolerance,
     subsample,
@@ -150,10 +151,17 @@ Start = Callable[[FloatArray, FloatArray], tuple[Pose, FloatArray] | None]
 
 
 def _solve(model: Model, data: Normalised, start: Start,
-           hint: ArrayLike | None = None) -> Solution:
+           hint: ArrayLike | None = None, *, nearest: bool = False) -> Solution:
     """Refine from every candidate axis (and the caller's ``hint``, e.g. the nominal
-    axis) and keep the best solution."""
+    axis) and keep the best solution; with ``nearest``, refine from the ``hint`` alone
+    (the local optimum nearest the nominal, as a CMM does; every candidate axis only
+    when the hint gives no start)."""
     q, sample = data.points, subsample(data.points)
+    if nearest and hint is not None:
+        first = start(sample, unit(hint, what="axis hint"))
+        if first is not None:
+            return polish(model, q, sample, first[0], first[1],
+                          step_tol=step_tolerance(data))
     axes = candidate_axes(sample, data.directions)
     if hint is not None:
         axes.insert(0, unit(hint, what="axis hint"))
@@ -208,12 +216,15 @@ def _axis_point(data: Normalised, pose: Pose) -> tuple[float, FloatArray]:
 
 
 @guarded("cylinder")
-def fit_cylinder(points: ArrayLike, axis: ArrayLike | None = None) -> CylinderFit:
+def fit_cylinder(points: ArrayLike, axis: ArrayLike | None = None, *,
+             nearest: bool = False) -> CylinderFit:
     """Least-squares (orthogonal distance) cylinder.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 5``, not all collinear.
         axis: an approximate axis (the nominal one) to start from as well, or None.
+        nearest: start from ``axis`` only and return the optimum nearest it (the
+            nominal's), not the best of every start (``fits_nominal`` checks the others).
 
     Returns:
         The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
@@ -223,7 +234,7 @@ def fit_cylinder(points: ArrayLike, axis: ArrayLike | None = None) -> CylinderFi
         ProbegenError: too few, non-finite or collinear points, or no solution.
     """
     data = _prepare(points, "cylinder", 5)
-    sol = _solve(CYLINDER, data, _start_cylinder, axis)
+    sol = _solve(CYLINDER, data, _start_cylinder, axis, nearest=nearest)
     _, point = _axis_point(data, sol.pose)
     radius = float(sol.shape[0]) * data.scale
     check_finite("cylinder", point, radius)
@@ -236,12 +247,15 @@ def fit_cylinder(points: ArrayLike, axis: ArrayLike | None = None) -> CylinderFi
 
 
 @guarded("cone")
-def fit_cone(points: ArrayLike, axis: ArrayLike | None = None) -> ConeFit:
+def fit_cone(points: ArrayLike, axis: ArrayLike | None = None, *,
+             nearest: bool = False) -> ConeFit:
     """Least-squares (orthogonal distance) cone.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 6``, not all collinear.
         axis: an approximate axis (the nominal one) to start from as well, or None.
+        nearest: start from ``axis`` only and return the optimum nearest it (the
+            nominal's), not the best of every start (``fits_nominal`` checks the others).
 
     Returns:
         The fit; ``point`` is the projection of the centroid onto the axis, ``axis``
@@ -253,7 +267,7 @@ def fit_cone(points: ArrayLike, axis: ArrayLike | None = None) -> ConeFit:
         solution flattens to a plane).
     """
     data = _prepare(points, "cone", 6)
-    sol = _solve(CONE, data, _start_cone, axis)
+    sol = _solve(CONE, data, _start_cone, axis, nearest=nearest)
     t, point = _axis_point(data, sol.pose)
     psi, dist = float(sol.shape[0]), float(sol.shape[1]) + t * math.sin(sol.shape[0])
     axis = sol.pose.axis if psi >= 0.0 else -sol.pose.axis
@@ -269,12 +283,15 @@ def fit_cone(points: ArrayLike, axis: ArrayLike | None = None) -> ConeFit:
 
 
 @guarded("torus")
-def fit_torus(points: ArrayLike, axis: ArrayLike | None = None) -> TorusFit:
+def fit_torus(points: ArrayLike, axis: ArrayLike | None = None, *,
+             nearest: bool = False) -> TorusFit:
     """Least-squares (orthogonal distance) torus.
 
     Args:
         points: ``(n, 3)`` float, ``n >= 7``, not all collinear.
         axis: an approximate axis (the nominal one) to start from as well, or None.
+        nearest: start from ``axis`` only and return the optimum nearest it (the
+            nominal's), not the best of every start (``fits_nominal`` checks the others).
 
     Returns:
         The fit; ``axis`` has its largest-magnitude component positive, residuals are
@@ -284,7 +301,7 @@ def fit_torus(points: ArrayLike, axis: ArrayLike | None = None) -> TorusFit:
         ProbegenError: too few, non-finite or collinear points, or no solution.
     """
     data = _prepare(points, "torus", 7)
-    sol = _solve(TORUS, data, _start_torus, axis)
+    sol = _solve(TORUS, data, _start_torus, axis, nearest=nearest)
     centre = data.to_world(sol.pose.origin)
     major, minor = (float(v) * data.scale for v in sol.shape)
     check_finite("torus", centre, major, minor)

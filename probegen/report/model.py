@@ -53,6 +53,7 @@ class Characteristic:
     status: str = "-"
     U: float | None = None
     decision: str | None = None
+    method: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,7 +274,8 @@ def _characteristic(r: _Reader, value: object, key: str) -> Characteristic:
         ok=ok, status=status,
         U=r.optional_number(c.get("U"), f"{key}.U"),
         decision=None if c.get("decision") is None
-        else r.text(c.get("decision"), f"{key}.decision"))
+        else r.text(c.get("decision"), f"{key}.decision"),
+        method=r.text(c.get("method", ""), f"{key}.method"))
 
 
 def _segment(r: _Reader, value: object, key: str) -> Segment:

@@ -17,12 +17,13 @@ POINT = "#111111"
 """Measured contact points."""
 
 LIGHT = "#f2d492"
-"""Error balls and bars for a positive residual (point outside the fitted sphere)."""
+"""Error balls and bars for a positive residual: material outside the surface (along
+the outward material normal; docs/results.md), whatever the kind."""
 
 LIGHT_EDGE = "#9c7a22"
 
 DARK = "#2e3a59"
-"""Error balls and bars for a negative residual (point inside)."""
+"""Error balls and bars for a negative residual: material missing (inside the surface)."""
 
 DARK_EDGE = "#11182a"
 

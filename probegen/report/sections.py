@@ -164,8 +164,8 @@ def _view(scene: Scene) -> View:
     if scene.points:
         legend.append(LegendItem("measured point", palette.POINT, "dot"))
     if scene.balls:
-        legend += [LegendItem("\u03b5 > 0 (outside)", palette.LIGHT, "ball"),
-                   LegendItem("\u03b5 < 0 (inside)", palette.DARK, "ball")]
+        legend += [LegendItem("\u03b5 > 0 (material outside)", palette.LIGHT, "ball"),
+                   LegendItem("\u03b5 < 0 (material inside)", palette.DARK, "ball")]
     return View(scene.id, scene.title, scene_json(scene), tuple(legend))
 
 
@@ -176,7 +176,7 @@ def form_plots(feature: Feature) -> FormPlots:
     eps = [e * UM for e in feature.residuals]
     if feature.kind == "freeform":
         return _deviation_plots(feature, eps)
-    bars = plots.bar_chart(eps, title=f"{feature.id}: radial residual per point",
+    bars = plots.bar_chart(eps, title=f"{feature.id}: residual per point (+ material outside)",
                            y_label="\u03b5 (\u00b5m)", decimals=3)
     if len(feature.directions) != len(eps):
         return FormPlots(feature.id, (bars,))
@@ -186,7 +186,7 @@ def form_plots(feature: Feature) -> FormPlots:
             f"\u03b5 {signed(e, 3)} \u00b5m"
             for i, (t, p, e) in enumerate(zip(theta, phi, eps, strict=True), start=1)]
     scatter = plots.scatter_plot(
-        theta, eps, title=f"{feature.id}: radial residual against polar angle",
+        theta, eps, title=f"{feature.id}: residual against polar angle (+ material outside)",
         x_label="polar angle \u03b8 from +Z (\u00b0)", y_label="\u03b5 (\u00b5m)",
         x_ticks=plots.angle_ticks(theta), labels=tips)
     return FormPlots(feature.id, (bars, scatter))
