@@ -3,7 +3,12 @@
 Exit codes (``ExitCode``): 0 ok, 1 other probegen error, 2 spec, 3 model, 4 planning or
 collision, 5 unsupported by the dialect, 6 parse error, 7 calibration, 8 a feature out of
 tolerance, 9 capture ended without the end marker, 10 the simulated program alarmed,
-64 usage.
+64 usage, 70 internal error (a bug: one line asking for a report; ``--debug`` shows the
+traceback), 73 an output file or folder cannot be written (:mod:`probegen.outputs`),
+130 interrupted.
+
+``-q``/``--quiet`` and ``--debug`` are accepted anywhere on the command line, before or
+after the command and its arguments.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from probegen import __version__
 from probegen.cli_exit import ExitCode
@@ -20,6 +25,7 @@ from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _targe
 from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report
 from probegen.errors import ProbegenError
+from probegen.outputs import protect_inputs, read_input, write_file
 
 
 def _sim(args: argparse.Namespace) -> int:
@@ -59,7 +65,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     kin = load_machine(args.errors) if args.errors else None
     from probegen.progress import Bar
 
-    text = Path(args.program).read_text(encoding="ascii", errors="replace")
+    text = read_input(args.program, "the program to run (Macro B or DMIS)")
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
@@ -71,7 +77,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     elif args.output == "-":
         sys.stdout.write(result.output)
     else:
-        Path(args.output).write_bytes(data)
+        write_file(args.output, data, "what the machine sends")
         print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
     for line in control_state(result):  # offsets and rotation the program left
         print(f"  control: {line}", file=sys.stderr)
@@ -110,7 +116,7 @@ def _post(args: argparse.Namespace) -> int:
                     dialect=args.dialect, offset=tuple(args.model_offset),
                     skip_unsupported=args.skip_unsupported, reroute=args.reroute,
                     number=args.number)
-    target = _target(Path(args.output), Path(args.program).stem,
+    target = _target(args.output, Path(args.program).stem,
                      get_dialect(args.dialect).EXTENSION, 1)
     map_path = write_post(out, target)
     posted = out.posted
@@ -130,7 +136,7 @@ def _post_ingest(args: argparse.Namespace) -> int:
     from probegen.post.evaluate import ingest_file, results_table
 
     result = ingest_file(args.log, args.features)
-    Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
+    write_file(args.output, result.output, "the DMIS output file", encoding="ascii")
     sys.stdout.write(results_table(result))
     print(f"wrote {args.output}")
     failed = any(not t.in_tolerance for t in result.tolerances.values())
@@ -139,12 +145,10 @@ def _post_ingest(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="probegen",
         description="Compile measuring programs for CNC machine tools and CMMs.")
     parser.add_argument("--version", action="version", version=f"probegen {__version__}")
-    parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bars (they only draw on a terminal anyway)")
     sub = parser.add_subparsers(dest="command", required=True)
 
     c = sub.add_parser("compile", help="plan a spec and write the measuring program(s)")
@@ -248,7 +252,34 @@ def build_parser() -> argparse.ArgumentParser:
     from probegen.grating import add_grating_commands  # M5: probegen grating ...
 
     add_grating_commands(sub)
+    _add_global_flags(parser, top=True)
     return parser
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors read ``probegen: error: <command>: ...`` (one
+    line, like every other error) and exit with ``ExitCode.USAGE``; its subparsers too."""
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        command = self.prog.removeprefix("probegen").strip()
+        where = f"{command}: " if command else ""
+        self.exit(ExitCode.USAGE, f"probegen: error: {where}{message}\n")
+
+
+def _add_global_flags(parser: argparse.ArgumentParser, *, top: bool) -> None:
+    """``-q``/``--quiet`` and ``--debug`` on ``parser`` and on every (nested) subcommand, so
+    they may stand anywhere on the line; below the top they default to "not given" and
+    leave the top level's value alone."""
+    default: Any = False if top else argparse.SUPPRESS
+    parser.add_argument("-q", "--quiet", action="store_true", default=default,
+                        help="no progress bars (they only draw on a terminal anyway)")
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="show the traceback of an error (for a bug report)")
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in dict.fromkeys(action.choices.values()):
+                _add_global_flags(sub, top=False)
 
 
 def _post_parsers(sub: Any) -> None:
@@ -286,7 +317,10 @@ def _post_parsers(sub: Any) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
+    """Run the command line; returns the exit code.  Nothing escapes but ``SystemExit``
+    from ``--help``/``--version``: a ``ProbegenError`` prints its one-line message, any
+    other exception is a bug and prints one line asking for a report (the traceback only
+    with ``--debug``)."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -295,17 +329,46 @@ def main(argv: list[str] | None = None) -> int:
     import probegen.progress
 
     probegen.progress.ENABLED = not args.quiet
+    protect_inputs(_inputs(args))
     try:
         return int(args.func(args))
     except ProbegenError as exc:
+        _traceback(args)
         print(f"probegen: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("probegen: interrupted", file=sys.stderr)
-        return 130
+        return ExitCode.INTERRUPTED
     except BrokenPipeError:  # output piped into e.g. head: not an error
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return ExitCode.OK
+    except Exception as exc:  # noqa: BLE001 - the guard: a bug, never a user error
+        _traceback(args)
+        message = " ".join(str(exc).split()) or "(no message)"
+        print(f"probegen: internal error: {type(exc).__name__}: {message} (please report "
+              f"this at the project's issue tracker; run again with --debug for the "
+              f"traceback)", file=sys.stderr)
+        return ExitCode.INTERNAL
+    finally:
+        protect_inputs(())
+
+
+_OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation", "pty"})
+"""The options that name what a command writes (everything else it is given it reads)."""
+
+
+def _inputs(args: argparse.Namespace) -> list[str]:
+    """The file names a command reads: every string argument but its outputs."""
+    return [v for k, v in vars(args).items()
+            if isinstance(v, str) and k not in _OUTPUT_OPTIONS and v not in ("", "-")]
+
+
+def _traceback(args: argparse.Namespace) -> None:
+    """Print the exception being handled with its traceback when ``--debug`` was given."""
+    if getattr(args, "debug", False):
+        import traceback
+
+        traceback.print_exc(file=sys.stderr)
 
 
 if __name__ == "__main__":

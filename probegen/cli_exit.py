@@ -6,7 +6,7 @@ from enum import IntEnum
 
 
 class ExitCode(IntEnum):
-    """Process exit codes."""
+    """Process exit codes (the list with their meaning: :mod:`probegen.cli` and the README)."""
 
     OK = 0
     ERROR = 1
@@ -20,3 +20,6 @@ class ExitCode(IntEnum):
     CAPTURE_INCOMPLETE = 9
     SIM_ALARM = 10
     USAGE = 64
+    INTERNAL = 70
+    OUTPUT = 73
+    INTERRUPTED = 130

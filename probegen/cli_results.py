@@ -9,6 +9,7 @@ from pathlib import Path
 
 from probegen.cli_exit import ExitCode
 from probegen.errors import ProbegenError
+from probegen.outputs import read_input, write_file
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
 """``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
@@ -39,9 +40,9 @@ def _ingest(args: argparse.Namespace) -> int:
         if not result.results:
             raise ProbegenError("--write-calibration: expected a sphere test in the spec, "
                                 "found none")
-        target = Path(args.write_calibration)
-        target.write_text(calibration_toml(result.results[0].calibration(str(args.log))),
-                          encoding="utf-8", newline="\n")
+        target = write_file(args.write_calibration,
+                            calibration_toml(result.results[0].calibration(str(args.log))),
+                            "the probe calibration")
         print(f"wrote the probe calibration {target}")
     failed = (any(r.ok is False for r in result.results)
               or any(r.ok is False for r in result.revolved)
@@ -84,7 +85,7 @@ def _qif(args: argparse.Namespace) -> int:
         out = read_dmis_output(args.input, strict=args.strict)
         limits = None
         if args.program:
-            text = Path(args.program).read_text(encoding="utf-8", errors="replace")
+            text = read_input(args.program, "the DMIS program")
             limits = read_dmis_tolerances(text, source=args.program)
         export = dmis_output_to_qif(out, tolerances=limits)
         text, notes = export.text, export.notes

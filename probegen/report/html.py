@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from probegen.errors import ProbegenError
+from probegen.outputs import write_file
 from probegen.report import sections
 from probegen.report.model import Characteristic, Results, read_results
 from probegen.report.numbers import fixed, signed
@@ -74,8 +75,7 @@ def write_report(results_json_path: str | Path, out_path: str | Path, *,
         raise ProbegenError(f"{src}:{exc.lineno}:{exc.colno}: expected results JSON, "
                             f"found invalid JSON ({exc.msg})") from exc
     page = render_report(doc, title=title, source=str(src))
-    out.write_text(page, encoding="utf-8", newline="\n")
-    return out
+    return write_file(out, page, "the HTML report")
 
 
 def overall_status(res: Results) -> str:

@@ -183,6 +183,8 @@ def _pump(
 
 def _open_log(path: Path, append: bool) -> BinaryIO:
     """Open the raw log for appending, or create it; never truncate."""
+    if path.is_dir():
+        raise ProbegenError(f"{path}: expected a file name for the raw log, found a folder")
     try:
         return open(path, "ab" if append else "xb")
     except FileExistsError:
