@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from probegen.cli_exit import ExitCode
-from probegen.errors import ProbegenError
+from probegen.errors import ProbegenError, ResultsParseError
 from probegen.outputs import read_input, write_file
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
@@ -82,11 +82,17 @@ def _qif(args: argparse.Namespace) -> int:
         from probegen.qif_dmis import read_dmis_tolerances
         from probegen.results import read_dmis_output
 
-        out = read_dmis_output(args.input, strict=args.strict)
         limits = None
         if args.program:
             text = read_input(args.program, "the DMIS program")
             limits = read_dmis_tolerances(text, source=args.program)
+        out = read_dmis_output(args.input, strict=args.strict)
+        if not out.features and not out.tolerances:
+            unread = len(out.diagnostics)
+            raise ResultsParseError(
+                f"{args.input}: expected DMIS output with feature or tolerance actuals (FA, "
+                f"TA), found none ({unread} statement{'s' if unread != 1 else ''} could not "
+                "be read)", out.diagnostics)
         export = dmis_output_to_qif(out, tolerances=limits)
         text, notes = export.text, export.notes
     else:

@@ -78,7 +78,7 @@ def _check_file(name: str) -> None:
     """Check existence, size, header and terminator of a STEP file before OCCT sees it."""
     file = Path(name)
     if not file.exists():
-        raise ModelError(f"{name}: no such file")
+        raise ModelError(f"{name}: expected a STEP file, found no such file")
     if not file.is_file():
         raise ModelError(f"{name}: not a regular file: expected a STEP file")
     try:

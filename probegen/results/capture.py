@@ -183,14 +183,19 @@ def _pump(
 
 def _open_log(path: Path, append: bool) -> BinaryIO:
     """Open the raw log for appending, or create it; never truncate."""
-    if path.is_dir():
-        raise ProbegenError(f"{path}: expected a file name for the raw log, found a folder")
+    _refuse_folder(path)
     try:
         return open(path, "ab" if append else "xb")
     except FileExistsError:
         raise _exists_error(path) from None
     except OSError as exc:
         raise ProbegenError(f"cannot create raw log '{path}': {exc.strerror}") from exc
+
+
+def _refuse_folder(path: Path) -> None:
+    """A folder where the raw log's file name is meant is an error (not "it exists")."""
+    if path.is_dir():
+        raise ProbegenError(f"{path}: expected a file name for the raw log, found a folder")
 
 
 def _exists_error(path: Path) -> ProbegenError:
@@ -278,6 +283,7 @@ def capture(
             opened or the log cannot be written.
     """
     path = Path(out_path)
+    _refuse_folder(path)
     if not append and path.exists():
         raise _exists_error(path)
     try:
