@@ -24,6 +24,7 @@ from probegen.cli_exit import ExitCode
 from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _target
 from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report
+from probegen.cli_types import finite, non_negative, positive
 from probegen.errors import ProbegenError
 from probegen.outputs import protect_inputs, read_input, write_file
 
@@ -177,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("sphere-points", help="show a sphere-test layout and its figures")
     s.add_argument("--layout", choices=("iso", "octahedral", "cap"), default="octahedral")
     s.add_argument("--points", type=int, default=25, help="number of points (cap only)")
-    s.add_argument("--max-polar-angle", type=float, default=90.0,
+    s.add_argument("--max-polar-angle", type=finite, default=90.0,
                    help="largest polar angle in degrees (cap only)")
     s.set_defaults(func=_sphere_points)
 
@@ -203,7 +204,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="stop bits (2)")
     cp.add_argument("--xonxoff", action=argparse.BooleanOptionalAction, default=True,
                     help="software flow control (on)")
-    cp.add_argument("--timeout", type=float, default=60.0,
+    cp.add_argument("--timeout", type=positive, default=60.0,
                     help="stop after this many idle seconds (60)")
     cp.add_argument("--append", action="store_true", help="append to an existing log")
     cp.set_defaults(func=_capture)
@@ -214,9 +215,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--part", help="the part model (STEP)")
     sm.add_argument("--machine", help="machine profile (TOML)")
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
-    sm.add_argument("--offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+    sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
-    sm.add_argument("--rotate-z", type=float, default=0.0, metavar="DEG",
+    sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",
                     help="part rotation about Z, degrees")
     sm.add_argument("--form", metavar="FILE",
                     help="planted form errors of revolved faces (TOML, docs/sim.md)")
@@ -224,7 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("-o", "--output", default="-", help="what the machine sends (default -)")
     sm.add_argument("--pty", metavar="LINK",
                     help="play the output over a pseudo-terminal linked at LINK")
-    sm.add_argument("--pty-delay", type=float, default=1.0,
+    sm.add_argument("--pty-delay", type=non_negative, default=1.0,
                     help="seconds to wait for the reader before sending (1)")
     sm.set_defaults(func=_sim)
 
@@ -292,7 +293,7 @@ def _post_parsers(sub: Any) -> None:
                     help="machine profile (TOML); its stylus must be the program's sensor")
     po.add_argument("--model", required=True,
                     help="the part (STEP), to check every move for collisions")
-    po.add_argument("--model-offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+    po.add_argument("--model-offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
     po.add_argument("--skip-unsupported", action="store_true",
@@ -317,25 +318,19 @@ def _post_parsers(sub: Any) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit code.  Nothing escapes but ``SystemExit``
-    from ``--help``/``--version``: a ``ProbegenError`` prints its one-line message, any
-    other exception is a bug and prints one line asking for a report (the traceback only
-    with ``--debug``)."""
-    parser = build_parser()
+    """Run the command line; returns the exit code.  No exception escapes: a
+    ``ProbegenError`` prints its one-line message, a usage error its usage and one line,
+    any other exception is a bug and prints one line asking for a report (the traceback
+    only with ``--debug``)."""
+    words = sys.argv[1:] if argv is None else argv
+    debug = "--debug" in words  # before the line is parsed (a bug in the parser itself)
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:
-        return ExitCode.OK if exc.code == 0 else ExitCode.USAGE
-    import probegen.progress
-
-    probegen.progress.ENABLED = not args.quiet
-    protect_inputs(_inputs(args))
-    try:
-        return int(args.func(args))
-    except ProbegenError as exc:
-        _traceback(args)
-        print(f"probegen: error: {exc}", file=sys.stderr)
-        return exc.exit_code
+        try:
+            args = build_parser().parse_args(words)
+        except SystemExit as exc:  # --help, --version, or a usage error (printed)
+            return ExitCode.OK if exc.code in (0, None) else ExitCode.USAGE
+        debug = args.debug
+        return _run(args)
     except KeyboardInterrupt:
         print("probegen: interrupted", file=sys.stderr)
         return ExitCode.INTERRUPTED
@@ -343,12 +338,26 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return ExitCode.OK
     except Exception as exc:  # noqa: BLE001 - the guard: a bug, never a user error
-        _traceback(args)
+        _traceback(debug)
         message = " ".join(str(exc).split()) or "(no message)"
         print(f"probegen: internal error: {type(exc).__name__}: {message} (please report "
               f"this at the project's issue tracker; run again with --debug for the "
               f"traceback)", file=sys.stderr)
         return ExitCode.INTERNAL
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command; a ``ProbegenError`` is its one-line message."""
+    import probegen.progress
+
+    probegen.progress.ENABLED = not args.quiet
+    protect_inputs(_inputs(args))
+    try:
+        return int(args.func(args))
+    except ProbegenError as exc:
+        _traceback(args.debug)
+        print(f"probegen: error: {exc}", file=sys.stderr)
+        return exc.exit_code
     finally:
         protect_inputs(())
 
@@ -363,9 +372,9 @@ def _inputs(args: argparse.Namespace) -> list[str]:
             if isinstance(v, str) and k not in _OUTPUT_OPTIONS and v not in ("", "-")]
 
 
-def _traceback(args: argparse.Namespace) -> None:
+def _traceback(debug: bool) -> None:
     """Print the exception being handled with its traceback when ``--debug`` was given."""
-    if getattr(args, "debug", False):
+    if debug:
         import traceback
 
         traceback.print_exc(file=sys.stderr)

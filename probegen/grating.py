@@ -1,3 +1,4 @@
+
 """Method M5 end to end: grating programs, the virtual grating, identification, outputs.
 
 The glue between planning (:mod:`probegen.planning.grating`), the dialects, the virtual
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from probegen import ir
+from probegen import cli_types, ir
 from probegen.calibrate.grating_io import (
     GratingReading,
     format_readings,
@@ -269,8 +270,9 @@ def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--errors", required=True, help="machine kinematics and errors (TOML)")
     s.add_argument("--second-offset", action="store_true", help="include the riser setups")
     s.add_argument("--second-head", action="store_true", help="include the second-head setups")
-    s.add_argument("--noise", type=float, default=0.0, help="reading noise sigma, um")
-    s.add_argument("--seed", type=int, default=0, help="noise seed")
+    s.add_argument("--noise", type=cli_types.non_negative, default=0.0,
+                   help="reading noise sigma, um")
+    s.add_argument("--seed", type=cli_types.seed, default=0, help="noise seed")
     s.add_argument("-o", "--output", default="readings.csv", help="readings CSV")
     s.set_defaults(func=_simulate)
     i = gs.add_parser("identify", help="identify the errors from grating readings")
