@@ -29,6 +29,9 @@ def load_toml(path: str | Path) -> dict[str, Any]:
         raise SpecError(f"{path}: expected a TOML file, found a folder") from None
     except OSError as exc:
         raise SpecError(f"{path}: expected a TOML file, cannot read it: {exc.strerror}") from None
+    if data.lstrip().startswith(b"ISO-10303-21;"):
+        raise SpecError(f"{path}: expected a TOML file, found a STEP model (a spec names its "
+                        "model in [part] model)")
     try:
         return tomllib.loads(data.decode("utf-8"))
     except UnicodeDecodeError as exc:

@@ -32,6 +32,7 @@ from typing import BinaryIO, Literal
 import serial
 
 from probegen.errors import ProbegenError
+from probegen.outputs import OutputError, output_folder
 
 __all__ = [
     "DEFAULT_BAUDRATE",
@@ -182,26 +183,27 @@ def _pump(
 
 
 def _open_log(path: Path, append: bool) -> BinaryIO:
-    """Open the raw log for appending, or create it; never truncate."""
+    """Open the raw log for appending, or create it (and its folder); never truncate."""
     _refuse_folder(path)
+    output_folder(path.parent, "the raw log")
     try:
         return open(path, "ab" if append else "xb")
     except FileExistsError:
         raise _exists_error(path) from None
     except OSError as exc:
-        raise ProbegenError(f"cannot create raw log '{path}': {exc.strerror}") from exc
+        raise OutputError(f"{path}: cannot create the raw log: {exc.strerror}") from exc
 
 
 def _refuse_folder(path: Path) -> None:
     """A folder where the raw log's file name is meant is an error (not "it exists")."""
     if path.is_dir():
-        raise ProbegenError(f"{path}: expected a file name for the raw log, found a folder")
+        raise OutputError(f"{path}: expected a file name for the raw log, found a folder")
 
 
 def _exists_error(path: Path) -> ProbegenError:
     return ProbegenError(
         f"raw log '{path}' already exists; a capture never overwrites one: "
-        "choose a new file name, or append to it (append=True, a resumed program)"
+        "choose a new file name, or append to it (capture --append, for a resumed program)"
     )
 
 
