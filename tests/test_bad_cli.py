@@ -176,7 +176,9 @@ COMMANDS = ["compile", "features", "plan", "sphere-points", "ingest", "sim", "qi
             "post", "post-ingest", "rotary", "rotary plan", "rotary sim", "rotary identify",
             "grating identify", "grating simulate", "grating", "nonsense", ""]
 """Every command but ``capture`` (a port that opens would wait for data) and the grating
-commands that succeed without any input (``grating plan``: slow, and writes)."""
+commands that succeed without any input (``grating plan``: slow, and writes).  The
+fragments are mostly bad inputs and option values, plus one good spec and its log so that
+some lines get as far as writing their outputs (into the current folder, a temporary one)."""
 
 FRAGMENTS = ["-o", "--output", "--spec", "--machine", "--part", "--errors", "--calibration",
              "--features", "--model", "--program", "--write-calibration", "--form", "--roll",
@@ -185,7 +187,9 @@ FRAGMENTS = ["-o", "--output", "--spec", "--machine", "--part", "--errors", "--c
              "nan", "1e999", "cap", "fanuc", "x" * 300, "\u00e9\u00fc\u2603", "nothere.toml",
              "nothere.step", "empty.toml", "empty.step", "garbage.nc", "garbage.dmi",
              "garbage.toml", "garbage.json", "folder", "folder.d", "folder/x.nc",
-             "empty.toml/x", "/proc/probegen-x", "/proc/probegen/"]
+             "empty.toml/x", "/proc/probegen-x", "/proc/probegen/",
+             str(REPO / "samples" / "sphere25" / "sphere_test.toml"),
+             str(REPO / "samples" / "sphere25" / "sphere_test.log")]
 
 
 @settings(max_examples=examples(60))
