@@ -216,3 +216,20 @@ def test_random_command_lines(command: str, fragments: list[str]) -> None:
     assert code != ExitCode.INTERNAL, (argv, err)
     debug = any(a.startswith("--de") for a in argv)  # --debug, perhaps abbreviated
     assert debug or "Traceback" not in err, (argv, err)
+
+
+@pytest.mark.parametrize(("argv", "bars"), [
+    (["sphere-points"], True),
+    (["-q", "sphere-points"], False),
+    (["sphere-points", "--quiet"], False),
+    (["rotary", "-q", "plan", "samples/rotary/m4.toml", "-o", "-"], False),
+    (["rotary", "plan", "samples/rotary/m4.toml", "-o", "-", "-q"], False),
+])
+def test_quiet_takes_effect_anywhere(in_repo: Path, monkeypatch: pytest.MonkeyPatch,
+                                     argv: list[str], bars: bool) -> None:
+    import probegen.progress
+
+    monkeypatch.setattr(probegen.progress, "ENABLED", not bars)  # restored afterwards
+    code, err = run(argv)
+    assert code == ExitCode.OK, err
+    assert probegen.progress.ENABLED is bars
