@@ -21,6 +21,7 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
+from probegen.cli_exit import ExitCode
 from probegen.errors import ProbegenError
 
 _PROTECTED: set[Path] = set()
@@ -29,7 +30,7 @@ _PROTECTED: set[Path] = set()
 class OutputError(ProbegenError):
     """An output file or folder cannot be written where it was asked for."""
 
-    exit_code = 73  # ExitCode.OUTPUT (sysexits' EX_CANTCREAT)
+    exit_code = ExitCode.OUTPUT  # 73, sysexits' EX_CANTCREAT
 
 
 def protect_inputs(paths: Iterable[str | os.PathLike[str]]) -> None:
