@@ -194,6 +194,15 @@ def _open_log(path: Path, append: bool) -> BinaryIO:
         raise OutputError(f"{path}: cannot create the raw log: {exc.strerror}") from exc
 
 
+def _port_problem(exc: Exception) -> str:
+    """What opening a port found, in words: ``no such file or directory`` rather than
+    pyserial's ``[Errno 2] could not open port X: [Errno 2] ...``."""
+    code = exc.args[0] if exc.args and isinstance(exc.args[0], int) else None
+    if code is not None:
+        return os.strerror(code).lower()
+    return str(exc)
+
+
 def _refuse_folder(path: Path) -> None:
     """A folder where the raw log's file name is meant is an error (not "it exists")."""
     if path.is_dir():
@@ -299,7 +308,8 @@ def capture(
             timeout=POLL_S,
         )
     except (serial.SerialException, ValueError) as exc:
-        raise ProbegenError(f"cannot open serial port '{port_url}': {exc}") from exc
+        raise ProbegenError(f"cannot open serial port '{port_url}': expected a serial device "
+                            f"or a pyserial URL, found {_port_problem(exc)}") from exc
     with port:
         return capture_from(
             port,
