@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -330,7 +331,10 @@ def main(argv: list[str] | None = None) -> int:
         except SystemExit as exc:  # --help, --version, or a usage error (printed)
             return ExitCode.OK if exc.code in (0, None) else ExitCode.USAGE
         debug = args.debug
-        return _run(args)
+        with warnings.catch_warnings():
+            if not debug:
+                warnings.showwarning = _one_line_warning
+            return _run(args)
     except KeyboardInterrupt:
         print("probegen: interrupted", file=sys.stderr)
         return ExitCode.INTERRUPTED
@@ -370,6 +374,14 @@ def _inputs(args: argparse.Namespace) -> list[str]:
     """The file names a command reads: every string argument but its outputs."""
     return [v for k, v in vars(args).items()
             if isinstance(v, str) and k not in _OUTPUT_OPTIONS and v not in ("", "-")]
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: Any = None, line: str | None = None) -> None:
+    """A Python warning (numpy's, a library's) as one line, without the source line that
+    looks like part of a traceback (``--debug`` shows warnings as Python prints them)."""
+    text = " ".join(str(message).split())
+    print(f"probegen: warning: {category.__name__}: {text}", file=sys.stderr)
 
 
 def _traceback(debug: bool) -> None:

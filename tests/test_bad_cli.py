@@ -233,3 +233,21 @@ def test_quiet_takes_effect_anywhere(in_repo: Path, monkeypatch: pytest.MonkeyPa
     code, err = run(argv)
     assert code == ExitCode.OK, err
     assert probegen.progress.ENABLED is bars
+
+
+def test_a_warning_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A library's warning reaches the user as one line, not as a source-code excerpt."""
+    import warnings
+
+    import probegen.cli
+
+    def warns(_args: object) -> int:
+        warnings.warn("invalid value encountered\nin divide", RuntimeWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(probegen.cli, "_sphere_points", warns)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        code, err = run(["sphere-points"])
+    assert code == ExitCode.OK
+    assert err == "probegen: warning: RuntimeWarning: invalid value encountered in divide\n"
