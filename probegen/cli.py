@@ -67,7 +67,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     kin = load_machine(args.errors) if args.errors else None
     from probegen.progress import Bar
 
-    text = read_input(args.program, "the program to run (Macro B or DMIS)")
+    text = read_input(args.program, "the program to run (Macro B or DMIS)", encoding="ascii")
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)

@@ -86,7 +86,7 @@ def _sim(args: argparse.Namespace) -> int:
         machine = replace(machine, pivot_length=spec.pivot_length)
     part = PlacedPart.from_spheres([spec.sphere_centre], [spec.sphere_radius])
     probe = probe_from_args(args, spec.machine.probe.ball_radius)
-    text = read_input(args.program, "the rotary test program (Macro B)")
+    text = read_input(args.program, "the rotary test program (Macro B)", encoding="ascii")
     result = run_text(text, VirtualMachine(part, probe, machine), kind="macrob",
                       source=args.program)
     if args.output == "-":

@@ -89,9 +89,9 @@ def write_file(path: str | os.PathLike[str], data: str | bytes, what: str, *,
 
 
 def read_input(path: str | os.PathLike[str], what: str,
-               error: type[ProbegenError] = ProbegenError) -> str:
-    """The text of the input file ``path`` (undecodable bytes replaced; the reader of the
-    text names what it cannot parse).
+               error: type[ProbegenError] = ProbegenError, *, encoding: str = "utf-8") -> str:
+    """The text of the input file ``path`` in ``encoding`` (undecodable bytes replaced; the
+    reader of the text names what it cannot parse).
 
     Raises:
         ``error``: the file is missing, is a folder or cannot be read.
@@ -100,7 +100,7 @@ def read_input(path: str | os.PathLike[str], what: str,
     if source.is_dir():
         raise error(f"{source}: expected {what}, found a folder")
     try:
-        return source.read_text(encoding="utf-8", errors="replace")
+        return source.read_text(encoding=encoding, errors="replace")
     except OSError as exc:
         raise error(f"{source}: expected {what}, cannot read it: {_reason(exc)}") from None
 
