@@ -40,6 +40,7 @@ fuzz: $(STAMP)
 
 goldens: $(STAMP)
 	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q tests/test_golden.py tests/test_bad_inputs.py \
+	    tests/test_bad_cli.py \
 	    tests/test_cad.py tests/test_ingest.py tests/test_dmis_vm.py tests/test_macrob.py \
 	    tests/test_qif.py tests/test_post.py
 	git status --short tests

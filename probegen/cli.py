@@ -6,7 +6,12 @@ tolerance (``ingest``: not accepted under the ISO 14253-1 decision rule, see
 ``docs/results.md``), 9 capture ended without the end marker, 10 the simulated program
 alarmed, 11 incomplete: a feature or toleranced characteristic NOT EVALUATED or the run did
 not finish (``ingest``, ``post-ingest``; 8 wins when something is also out of tolerance, see
-``probegen.cli_exit``), 64 usage.
+``probegen.cli_exit``), 64 usage, 70 internal error (a bug: one line asking for a report;
+``--debug`` shows the traceback), 73 an output file or folder cannot be written
+(:mod:`probegen.outputs`), 130 interrupted.
+
+``-q``/``--quiet`` and ``--debug`` are accepted anywhere on the command line, before or
+after the command and its arguments.
 """
 
 from __future__ import annotations
@@ -14,15 +19,18 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from probegen import __version__
 from probegen.cli_exit import ExitCode
 from probegen.cli_plan import _compile, _features, _plan, _sphere_points, _target
 from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.cli_results import _PARITY, _capture, _ingest, _qif, _report, add_log_options
+from probegen.cli_types import finite, non_negative, positive
 from probegen.errors import ProbegenError
+from probegen.outputs import protect_inputs, read_input, write_file
 from probegen.uncertainty import DECISION_RULES
 
 
@@ -63,7 +71,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     kin = load_machine(args.errors) if args.errors else None
     from probegen.progress import Bar
 
-    text = Path(args.program).read_text(encoding="ascii", errors="replace")
+    text = read_input(args.program, "the program to run (Macro B or DMIS)", encoding="ascii")
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
@@ -75,7 +83,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     elif args.output == "-":
         sys.stdout.write(result.output)
     else:
-        Path(args.output).write_bytes(data)
+        write_file(args.output, data, "what the machine sends")
         print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
     for line in control_state(result):  # offsets and rotation the program left
         print(f"  control: {line}", file=sys.stderr)
@@ -114,7 +122,7 @@ def _post(args: argparse.Namespace) -> int:
                     dialect=args.dialect, offset=tuple(args.model_offset),
                     skip_unsupported=args.skip_unsupported, reroute=args.reroute,
                     number=args.number)
-    target = _target(Path(args.output), Path(args.program).stem,
+    target = _target(args.output, Path(args.program).stem,
                      get_dialect(args.dialect).EXTENSION, 1)
     map_path = write_post(out, target)
     posted = out.posted
@@ -138,7 +146,7 @@ def _post_ingest(args: argparse.Namespace) -> int:
     cal = load_calibration(args.calibration) if args.calibration else None
     log, result, notes = ingest_file(args.log, args.features, cal, run=args.run,
                                      ignore_identity=args.ignore_identity)
-    Path(args.output).write_text(result.output, encoding="ascii", newline="\n")
+    write_file(args.output, result.output, "the DMIS output file", encoding="ascii")
     print(f"probe: {UNCALIBRATED if cal is None else cal.describe()}")
     sys.stdout.write(results_table(result))
     for note in notes:
@@ -151,12 +159,10 @@ def _post_ingest(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="probegen",
         description="Compile measuring programs for CNC machine tools and CMMs.")
     parser.add_argument("--version", action="version", version=f"probegen {__version__}")
-    parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bars (they only draw on a terminal anyway)")
     sub = parser.add_subparsers(dest="command", required=True)
 
     c = sub.add_parser("compile", help="plan a spec and write the measuring program(s)")
@@ -188,7 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("sphere-points", help="show a sphere-test layout and its figures")
     s.add_argument("--layout", choices=("iso", "octahedral", "cap"), default="octahedral")
     s.add_argument("--points", type=int, default=25, help="number of points (cap only)")
-    s.add_argument("--max-polar-angle", type=float, default=90.0,
+    s.add_argument("--max-polar-angle", type=finite, default=90.0,
                    help="largest polar angle in degrees (cap only)")
     s.set_defaults(func=_sphere_points)
 
@@ -221,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="stop bits (2)")
     cp.add_argument("--xonxoff", action=argparse.BooleanOptionalAction, default=True,
                     help="software flow control (on)")
-    cp.add_argument("--timeout", type=float, default=60.0,
+    cp.add_argument("--timeout", type=positive, default=60.0,
                     help="stop after this many idle seconds (60)")
     cp.add_argument("--append", action="store_true", help="append to an existing log")
     cp.set_defaults(func=_capture)
@@ -232,9 +238,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--part", help="the part model (STEP)")
     sm.add_argument("--machine", help="machine profile (TOML)")
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
-    sm.add_argument("--offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+    sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
-    sm.add_argument("--rotate-z", type=float, default=0.0, metavar="DEG",
+    sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",
                     help="part rotation about Z, degrees")
     sm.add_argument("--form", metavar="FILE",
                     help="planted form errors of revolved faces (TOML, docs/sim.md)")
@@ -242,7 +248,7 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("-o", "--output", default="-", help="what the machine sends (default -)")
     sm.add_argument("--pty", metavar="LINK",
                     help="play the output over a pseudo-terminal linked at LINK")
-    sm.add_argument("--pty-delay", type=float, default=1.0,
+    sm.add_argument("--pty-delay", type=non_negative, default=1.0,
                     help="seconds to wait for the reader before sending (1)")
     sm.set_defaults(func=_sim)
 
@@ -273,7 +279,34 @@ def build_parser() -> argparse.ArgumentParser:
     from probegen.grating import add_grating_commands  # M5: probegen grating ...
 
     add_grating_commands(sub)
+    _add_global_flags(parser, top=True)
     return parser
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors read ``probegen: error: <command>: ...`` (one
+    line, like every other error) and exit with ``ExitCode.USAGE``; its subparsers too."""
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        command = self.prog.removeprefix("probegen").strip()
+        where = f"{command}: " if command else ""
+        self.exit(ExitCode.USAGE, f"probegen: error: {where}{message}\n")
+
+
+def _add_global_flags(parser: argparse.ArgumentParser, *, top: bool) -> None:
+    """``-q``/``--quiet`` and ``--debug`` on ``parser`` and on every (nested) subcommand, so
+    they may stand anywhere on the line; below the top they default to "not given" and
+    leave the top level's value alone."""
+    default: Any = False if top else argparse.SUPPRESS
+    parser.add_argument("-q", "--quiet", action="store_true", default=default,
+                        help="no progress bars (they only draw on a terminal anyway)")
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="show the traceback of an error (for a bug report)")
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in dict.fromkeys(action.choices.values()):
+                _add_global_flags(sub, top=False)
 
 
 def _post_parsers(sub: Any) -> None:
@@ -286,7 +319,7 @@ def _post_parsers(sub: Any) -> None:
                     help="machine profile (TOML); its stylus must be the program's sensor")
     po.add_argument("--model", required=True,
                     help="the part (STEP), to check every move for collisions")
-    po.add_argument("--model-offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+    po.add_argument("--model-offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
     po.add_argument("--skip-unsupported", action="store_true",
@@ -314,26 +347,77 @@ def _post_parsers(sub: Any) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
-    parser = build_parser()
+    """Run the command line; returns the exit code.  No exception escapes: a
+    ``ProbegenError`` prints its one-line message, a usage error its usage and one line,
+    any other exception is a bug and prints one line asking for a report (the traceback
+    only with ``--debug``)."""
+    words = sys.argv[1:] if argv is None else argv
+    debug = "--debug" in words  # before the line is parsed (a bug in the parser itself)
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:
-        return ExitCode.OK if exc.code == 0 else ExitCode.USAGE
-    import probegen.progress
-
-    probegen.progress.ENABLED = not args.quiet
-    try:
-        return int(args.func(args))
-    except ProbegenError as exc:
-        print(f"probegen: error: {exc}", file=sys.stderr)
-        return exc.exit_code
+        try:
+            args = build_parser().parse_args(words)
+        except SystemExit as exc:  # --help, --version, or a usage error (printed)
+            return ExitCode.OK if exc.code in (0, None) else ExitCode.USAGE
+        debug = args.debug
+        with warnings.catch_warnings():
+            if not debug:
+                warnings.showwarning = _one_line_warning
+            return _run(args)
     except KeyboardInterrupt:
         print("probegen: interrupted", file=sys.stderr)
-        return 130
+        return ExitCode.INTERRUPTED
     except BrokenPipeError:  # output piped into e.g. head: not an error
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return ExitCode.OK
+    except Exception as exc:  # noqa: BLE001 - the guard: a bug, never a user error
+        _traceback(debug)
+        message = " ".join(str(exc).split()) or "(no message)"
+        print(f"probegen: internal error: {type(exc).__name__}: {message} (please report "
+              f"this at the project's issue tracker; run again with --debug for the "
+              f"traceback)", file=sys.stderr)
+        return ExitCode.INTERNAL
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command; a ``ProbegenError`` is its one-line message."""
+    import probegen.progress
+
+    probegen.progress.ENABLED = not args.quiet
+    protect_inputs(_inputs(args))
+    try:
+        return int(args.func(args))
+    except ProbegenError as exc:
+        _traceback(args.debug)
+        print(f"probegen: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    finally:
+        protect_inputs(())
+
+
+_OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation", "pty"})
+"""The options that name what a command writes (everything else it is given it reads)."""
+
+
+def _inputs(args: argparse.Namespace) -> list[str]:
+    """The file names a command reads: every string argument but its outputs."""
+    return [v for k, v in vars(args).items()
+            if isinstance(v, str) and k not in _OUTPUT_OPTIONS and v not in ("", "-")]
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: Any = None, line: str | None = None) -> None:
+    """A Python warning (numpy's, a library's) as one line, without the source line that
+    looks like part of a traceback (``--debug`` shows warnings as Python prints them)."""
+    text = " ".join(str(message).split())
+    print(f"probegen: warning: {category.__name__}: {text}", file=sys.stderr)
+
+
+def _traceback(debug: bool) -> None:
+    """Print the exception being handled with its traceback when ``--debug`` was given."""
+    if debug:
+        import traceback
+
+        traceback.print_exc(file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ from enum import IntEnum
 
 
 class ExitCode(IntEnum):
-    """Process exit codes."""
+    """Process exit codes (the list with their meaning: :mod:`probegen.cli` and the README)."""
 
     OK = 0
     ERROR = 1
@@ -31,3 +31,6 @@ class ExitCode(IntEnum):
     SIM_ALARM = 10
     INCOMPLETE = 11
     USAGE = 64
+    INTERNAL = 70
+    OUTPUT = 73
+    INTERRUPTED = 130

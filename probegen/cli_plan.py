@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
 
 from probegen.cli_exit import ExitCode
 from probegen.errors import ProbegenError
+from probegen.outputs import write_file
 
 
 def _compile(args: argparse.Namespace) -> int:
@@ -31,9 +33,8 @@ def _compile(args: argparse.Namespace) -> int:
         if args.output == "-":
             sys.stdout.write(text)
             continue
-        target = _target(Path(args.output), Path(args.spec).stem, dialect.EXTENSION, len(names))
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_bytes(text.encode("ascii"))
+        target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
+        write_file(target, text, f"the {name} program", encoding="ascii")
         outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
     from probegen.compensate import UNCALIBRATED
 
@@ -76,8 +77,12 @@ def _print_freeform(planned: Any, indent: str) -> None:
             print(indent + line)
 
 
-def _target(out: Path, stem: str, ext: str, count: int) -> Path:
-    if out.suffix and count == 1:
+def _target(output: str, stem: str, ext: str, count: int) -> Path:
+    """The program file ``-o output`` names: ``output`` itself when it is a file name (it has
+    a suffix, one program is written, and it is neither an existing folder nor ends in
+    ``/``), else ``output/<stem><ext>``."""
+    out = Path(output)
+    if out.suffix and count == 1 and not out.is_dir() and not output.endswith(("/", os.sep)):
         return out
     return out / f"{stem}{ext}"
 

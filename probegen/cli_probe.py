@@ -5,16 +5,19 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from probegen import cli_types
+
 if TYPE_CHECKING:
     from probegen.machine.probe_model import ProbeModel
 
 
 def add_probe_options(parser: argparse.ArgumentParser) -> None:
     """``--lobing``, ``--noise`` and ``--seed``: the simulated probe's pre-travel and noise."""
-    parser.add_argument("--lobing", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+    parser.add_argument("--lobing", type=cli_types.finite, nargs=3, default=(0.0, 0.0, 0.0),
                         metavar=("LATERAL", "AXIAL", "LOBE"), help="probe pre-travel, mm")
-    parser.add_argument("--noise", type=float, default=0.0, help="trigger noise sigma, mm")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed")
+    parser.add_argument("--noise", type=cli_types.non_negative, default=0.0,
+                        help="trigger noise sigma, mm")
+    parser.add_argument("--seed", type=cli_types.seed, default=0, help="noise seed")
 
 
 def probe_from_args(args: argparse.Namespace, ball_radius: float) -> ProbeModel:

@@ -10,7 +10,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.cli_exit import ExitCode
-from probegen.errors import ProbegenError
+from probegen.errors import ProbegenError, ResultsParseError
+from probegen.outputs import read_input
 
 if TYPE_CHECKING:
     from probegen.ingest import Ingested
@@ -134,11 +135,17 @@ def _qif(args: argparse.Namespace) -> int:
         from probegen.qif_dmis import read_dmis_tolerances
         from probegen.results import read_dmis_output
 
-        out = read_dmis_output(args.input, strict=args.strict)
         limits = None
         if args.program:
-            text = Path(args.program).read_text(encoding="utf-8", errors="replace")
+            text = read_input(args.program, "the DMIS program")
             limits = read_dmis_tolerances(text, source=args.program)
+        out = read_dmis_output(args.input, strict=args.strict)
+        if not out.features and not out.tolerances:
+            unread = len(out.diagnostics)
+            raise ResultsParseError(
+                f"{args.input}: expected DMIS output with feature or tolerance actuals (FA, "
+                f"TA), found none ({unread} statement{'s' if unread != 1 else ''} could not "
+                "be read)", out.diagnostics)
         export = dmis_output_to_qif(out, tolerances=limits)
         text, notes = export.text, export.notes
     else:

@@ -16,14 +16,17 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from probegen.cli_plan import _target
 from probegen.cli_probe import add_probe_options, probe_from_args
 from probegen.errors import ProbegenError
+from probegen.outputs import read_input, write_file
 
 
 def add_rotary_commands(sub: Any) -> None:
     """Register ``rotary plan|sim|identify`` on the top-level subparsers ``sub``."""
     ro = sub.add_parser("rotary", help="method M4: rotary-axis tests of a five-axis machine")
-    rsub = ro.add_subparsers(dest="rotary_command", required=True)
+    rsub = ro.add_subparsers(dest="rotary_command", required=True,
+                             metavar="{plan,sim,identify}")
     p = rsub.add_parser("plan", help="plan a rotary test spec and write its program")
     p.add_argument("spec", help="rotary test spec (TOML), e.g. samples/rotary/m4.toml")
     p.add_argument("-d", "--dialect", default="fanuc", help="dialect (fanuc, haas, linuxcnc)")
@@ -59,11 +62,8 @@ def _plan(args: argparse.Namespace) -> int:
     if args.output == "-":
         sys.stdout.write(text)
         return 0
-    target = Path(args.output)
-    if target.suffix == "":
-        target = target / (Path(args.spec).stem + dialect.EXTENSION)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_bytes(text.encode("ascii"))
+    target = write_file(_target(args.output, Path(args.spec).stem, dialect.EXTENSION, 1), text,
+                        "the rotary test program", encoding="ascii")
     for st in plan.stations:
         print(f"{st.feature:5} B{st.b:7.2f} C{st.c:7.2f}  {len(st.directions):2} touches  "
               f"retract {st.retract:.1f} mm")
@@ -88,13 +88,14 @@ def _sim(args: argparse.Namespace) -> int:
         machine = replace(machine, pivot_length=spec.pivot_length)
     part = PlacedPart.from_spheres([spec.sphere_centre], [spec.sphere_radius])
     probe = probe_from_args(args, spec.machine.probe.ball_radius)
-    text = Path(args.program).read_text(encoding="ascii", errors="replace")
+    text = read_input(args.program, "the rotary test program (Macro B)", encoding="ascii")
     result = run_text(text, VirtualMachine(part, probe, machine), kind="macrob",
                       source=args.program)
     if args.output == "-":
         sys.stdout.write(result.output)
     else:
-        Path(args.output).write_bytes(result.output.encode("ascii"))
+        write_file(args.output, result.output.encode("ascii", errors="replace"),
+                   "the DPRNT log")
         print(f"{result.touches} touches; wrote {args.output}")
     if result.alarm:
         print(f"probegen: alarm {result.alarm}", file=sys.stderr)
@@ -134,7 +135,7 @@ def _write_compensation(spec: Any, shift: tuple[float, float, float], target: Pa
     from probegen.planning.rotary import compensation_program
 
     text = get_dialect("fanuc").generate(compensation_program(spec, shift))
-    target.write_bytes(text.encode("ascii"))
+    write_file(target, text, "the work-offset update", encoding="ascii")
     print(f"wrote the work-offset update {target}")
 
 

@@ -1,3 +1,4 @@
+
 """Method M5 end to end: grating programs, the virtual grating, identification, outputs.
 
 The glue between planning (:mod:`probegen.planning.grating`), the dialects, the virtual
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from probegen import ir
+from probegen import cli_types, ir
 from probegen.calibrate.grating_io import (
     GratingReading,
     format_readings,
@@ -25,6 +26,7 @@ from probegen.calibrate.identify import Identification
 from probegen.calibrate.identify_model import VolumetricModel
 from probegen.errors import CalibrationError, ProbegenError, UnsupportedError
 from probegen.machine.kinematics import PLANES, Machine
+from probegen.outputs import output_folder, write_file
 from probegen.planning.grating import (
     GratingSpec,
     SetupPlan,
@@ -122,11 +124,10 @@ def _spec(args: argparse.Namespace) -> GratingSpec:
 
 
 def _plan(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.output, "the grating programs")
     for prog in grating_programs(_spec(args), second_offset=args.second_offset,
                                  second_head=args.second_head, dialect=args.dialect):
-        (out / prog.file_name).write_text(prog.text, encoding="ascii", newline="\n")
+        write_file(out / prog.file_name, prog.text, "a grating program", encoding="ascii")
         print(f"wrote {out / prog.file_name} ({prog.plan.setup.label}, "
               f"{len(prog.plan.stops)} stops)")
     return 0
@@ -139,7 +140,7 @@ def _simulate(args: argparse.Namespace) -> int:
                                  second_offset=args.second_offset,
                                  second_head=args.second_head, noise=args.noise,
                                  seed=args.seed)
-    Path(args.output).write_text(format_readings(readings), encoding="ascii", newline="\n")
+    write_file(args.output, format_readings(readings), "the grating readings", encoding="ascii")
     print(f"wrote {args.output} ({len(readings)} readings)")
     return 0
 
@@ -154,7 +155,7 @@ def write_outputs(out: Path, result: Identification, stepwise: Identification | 
         volumetric_map,
     )
 
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out, "the identification's files")
     text = summary(result, stepwise)
     if stepwise is not None:
         text += [""] + summary(stepwise)
@@ -165,7 +166,7 @@ def write_outputs(out: Path, result: Identification, stepwise: Identification | 
         files[f"pitch_{name}_fanuc.csv"] = fanuc_pitch_table(result, axis)
     files.update(_plots(result, head))
     for name, content in files.items():
-        (out / name).write_text(content, encoding="utf-8", newline="\n")
+        write_file(out / name, content, "an identification file")
     return text + [f"wrote {len(files)} files into {out}"]
 
 
@@ -254,7 +255,8 @@ def _identify(args: argparse.Namespace) -> int:
 def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     """Add ``probegen grating plan|simulate|identify`` to the CLI's subparsers."""
     g = sub.add_parser("grating", help="M5: 21 geometric errors from planar-grating paths")
-    gs = g.add_subparsers(dest="grating_command", required=True)
+    gs = g.add_subparsers(dest="grating_command", required=True,
+                           metavar="{plan,simulate,identify}")
     p = gs.add_parser("plan", help="write the grating programs (one per setup)")
     p.add_argument("--spec", help="grating plan (TOML, see samples/grating/grating.toml)")
     p.add_argument("--second-offset", action="store_true",
@@ -270,8 +272,9 @@ def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--errors", required=True, help="machine kinematics and errors (TOML)")
     s.add_argument("--second-offset", action="store_true", help="include the riser setups")
     s.add_argument("--second-head", action="store_true", help="include the second-head setups")
-    s.add_argument("--noise", type=float, default=0.0, help="reading noise sigma, um")
-    s.add_argument("--seed", type=int, default=0, help="noise seed")
+    s.add_argument("--noise", type=cli_types.non_negative, default=0.0,
+                   help="reading noise sigma, um")
+    s.add_argument("--seed", type=cli_types.seed, default=0, help="noise seed")
     s.add_argument("-o", "--output", default="readings.csv", help="readings CSV")
     s.set_defaults(func=_simulate)
     i = gs.add_parser("identify", help="identify the errors from grating readings")

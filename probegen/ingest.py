@@ -818,8 +818,9 @@ def _columns(rows: Sequence[tuple[str, ...]]) -> str:
 
 def write_outputs(ing: Ingested, out_dir: Path) -> tuple[Path, Path]:
     """Write ``results.json`` and ``results.csv`` into ``out_dir``."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    js, cs = out_dir / "results.json", out_dir / "results.csv"
-    js.write_text(to_json(ing), encoding="utf-8", newline="\n")
-    cs.write_text(to_csv(ing), encoding="utf-8", newline="\n")
+    from probegen.outputs import output_folder, write_file
+
+    output_folder(out_dir, "results.json and results.csv")
+    js = write_file(out_dir / "results.json", to_json(ing), "the results")
+    cs = write_file(out_dir / "results.csv", to_csv(ing), "the results table")
     return js, cs

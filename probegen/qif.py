@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.errors import ProbegenError
+from probegen.outputs import write_file
 from probegen.qif_dmis import DmisTolerance, QifExport, dmis_output_qif, read_dmis_tolerances
 from probegen.qif_validate import SCHEMA_ENV, QifValidationError, load_schema, validate_qif
 
@@ -139,9 +140,4 @@ def write_qif(path: str | os.PathLike[str], text: str, *,
     target = Path(path)
     if validate:
         validate_qif(text, schema=schema, source=str(target))
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(text, encoding="utf-8", newline="\n")
-    except OSError as exc:
-        raise ProbegenError(f"cannot write QIF file '{target}': {exc.strerror}") from exc
-    return target
+    return write_file(target, text, "the QIF document")

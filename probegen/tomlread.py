@@ -24,13 +24,19 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     try:
         data = p.read_bytes()
     except FileNotFoundError:
-        raise SpecError(f"{path}: no such file") from None
+        raise SpecError(f"{path}: expected a TOML file, found no such file") from None
+    except IsADirectoryError:
+        raise SpecError(f"{path}: expected a TOML file, found a folder") from None
     except OSError as exc:
-        raise SpecError(f"{path}: cannot read: {exc.strerror}") from None
+        raise SpecError(f"{path}: expected a TOML file, cannot read it: {exc.strerror}") from None
+    if data.lstrip().startswith(b"ISO-10303-21;"):
+        raise SpecError(f"{path}: expected a TOML file, found a STEP model (a spec names its "
+                        "model in [part] model)")
     try:
         return tomllib.loads(data.decode("utf-8"))
     except UnicodeDecodeError as exc:
-        raise SpecError(f"{path}: expected UTF-8 text, found byte {exc.start}") from None
+        raise SpecError(f"{path}: expected UTF-8 text, found the byte 0x{data[exc.start]:02x} "
+                        f"at offset {exc.start}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"{path}: not valid TOML: {exc}") from None
 

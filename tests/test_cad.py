@@ -276,7 +276,7 @@ def test_bad_step_golden(name: str, capfd: pytest.CaptureFixture[str]) -> None:
 
 
 def test_directory_is_not_a_step_file() -> None:
-    with pytest.raises(ModelError, match=r"^tests: not a regular file"):
+    with pytest.raises(ModelError, match=r"^tests: expected a STEP file, found a folder$"):
         cad.load_step("tests")
 
 

@@ -306,5 +306,15 @@ def test_unknown_port_is_a_clear_error(tmp_path: Path) -> None:
 
 
 def test_unwritable_log_is_a_clear_error(tmp_path: Path) -> None:
-    with pytest.raises(ProbegenError, match="cannot create raw log"):
-        capture("loop://", tmp_path / "missing-dir" / "run.log", **QUICK)
+    (tmp_path / "file").write_text("a file where the log's folder is meant\n")
+    with pytest.raises(ProbegenError, match="file: expected a folder for the raw log, found a "
+                                            "file"):
+        capture("loop://", tmp_path / "file" / "run.log", **QUICK)
+
+
+def test_log_folder_is_created(tmp_path: Path) -> None:
+    """Like every output folder, the raw log's is created (the log itself is never
+    overwritten)."""
+    out = tmp_path / "new-dir" / "run.log"
+    capture("loop://", out, **QUICK)
+    assert out.is_file()

@@ -38,7 +38,8 @@ def test_features_lists_the_sample(in_repo: Path, capsys: pytest.CaptureFixture[
 
 def test_missing_model_is_a_model_error(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["features", "nope.step"]) == ExitCode.MODEL
-    assert capsys.readouterr().err == "probegen: error: nope.step: no such file\n"
+    assert capsys.readouterr().err == ("probegen: error: nope.step: expected a STEP file, "
+                                           "found no such file\n")
 
 
 def test_usage_error() -> None:

@@ -72,8 +72,11 @@ def test_bad_readings_say_where_what_and_found(tmp_path: Path, text: str,
 def test_not_utf8_and_missing_file(tmp_path: Path) -> None:
     with pytest.raises(CalibrationDataError, match="UTF-8"):
         read_readings(write(tmp_path, b"plane\xff\n"))
-    with pytest.raises(CalibrationDataError, match="cannot read"):
+    with pytest.raises(CalibrationDataError, match="none.csv: expected a CSV file, found no "
+                                                   "such file"):
         read_readings(tmp_path / "none.csv")
+    with pytest.raises(CalibrationDataError, match="expected a CSV file, found a folder"):
+        read_readings(tmp_path)
 
 
 def test_reading_never_modifies_the_raw_file(tmp_path: Path) -> None:

@@ -262,7 +262,8 @@ def test_feature_map_errors_name_the_key(tmp_path: Path,
                        r"finite number|key 'touches\[0\].reach': expected"):
         read_feature_map(path)
     path.write_text(text[:-20])
-    with pytest.raises(ResultsParseError, match="not a JSON feature map"):
+    with pytest.raises(ResultsParseError, match=r"m.features.json:\d+:\d+: expected the JSON "
+                       "feature map that probegen post wrote, found invalid JSON"):
         read_feature_map(path)
     path.write_text(text)
     assert read_feature_map(path) == posted[SIMPLE.name].fmap

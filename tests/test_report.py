@@ -351,7 +351,8 @@ def test_write_report_rejects_bad_json(tmp_path: Path) -> None:
     src.write_text('{"features": [\n  1,,\n]}', encoding="utf-8")
     with pytest.raises(ProbegenError, match=r"results.json:2:5: expected results JSON"):
         write_report(src, tmp_path / "r.html")
-    with pytest.raises(ProbegenError, match="cannot read the results"):
+    with pytest.raises(ProbegenError, match="missing.json: expected the results.json that "
+                                            "probegen ingest wrote, found no such file"):
         write_report(tmp_path / "missing.json", tmp_path / "r.html")
 
 

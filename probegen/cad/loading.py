@@ -78,9 +78,10 @@ def _check_file(name: str) -> None:
     """Check existence, size, header and terminator of a STEP file before OCCT sees it."""
     file = Path(name)
     if not file.exists():
-        raise ModelError(f"{name}: no such file")
+        raise ModelError(f"{name}: expected a STEP file, found no such file")
     if not file.is_file():
-        raise ModelError(f"{name}: not a regular file: expected a STEP file")
+        raise ModelError(f"{name}: expected a STEP file, found "
+                         f"{'a folder' if file.is_dir() else 'something else (not a file)'}")
     try:
         size = file.stat().st_size
         with file.open("rb") as stream:
@@ -90,7 +91,7 @@ def _check_file(name: str) -> None:
     except OSError as exc:
         raise ModelError(f"{name}: cannot read file ({exc.strerror})") from None
     if size == 0:
-        raise ModelError(f"{name}: file is empty (0 bytes)")
+        raise ModelError(f"{name}: expected a STEP file, found an empty file (0 bytes)")
     first = head.removeprefix(b"\xef\xbb\xbf").lstrip().split(b"\n", 1)[0].strip()
     if not first.startswith(STEP_HEADER.encode()):
         raise ModelError(

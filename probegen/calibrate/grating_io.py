@@ -103,9 +103,19 @@ def _rows(path: str | Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header and data rows (with 1-based line numbers) of a CSV, comments skipped."""
     source = str(path)
     try:
-        text = Path(path).read_bytes().decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CalibrationDataError(f"{source}: cannot read a UTF-8 CSV file: {exc}") from exc
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise CalibrationDataError(f"{source}: expected a CSV file, found no such file") from None
+    except IsADirectoryError:
+        raise CalibrationDataError(f"{source}: expected a CSV file, found a folder") from None
+    except OSError as exc:
+        raise CalibrationDataError(f"{source}: expected a CSV file, cannot read it: "
+                                   f"{exc.strerror}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CalibrationDataError(f"{source}: expected UTF-8 text, found the byte "
+                                   f"0x{data[exc.start]:02x} at offset {exc.start}") from None
     header: list[str] | None = None
     rows: list[tuple[int, list[str]]] = []
     try:

@@ -140,7 +140,7 @@ def cap_layout(n: int, theta_max_deg: float = 90.0, *, energy_exponent: float = 
         e, g = _energy(full, n, energy_exponent)
         return e, g[2:]
 
-    bounds = [(1e-6, theta_max), (None, None)] * (n - 1)
+    bounds = [(min(1e-6, theta_max / 2.0), theta_max), (None, None)] * (n - 1)
     res = minimize(
         fun, seed.ravel(), jac=True, method="L-BFGS-B", bounds=bounds,
         options={"maxiter": 3000, "ftol": 1e-15, "gtol": 1e-12},

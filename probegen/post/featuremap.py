@@ -128,6 +128,9 @@ def read_feature_map(path: str | Path) -> FeatureMap:
     """
     try:
         data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise ResultsParseError(f"{path}: expected the feature map (JSON) that probegen post "
+                                "wrote, found no such file") from None
     except OSError as exc:
         raise ResultsParseError(f"{path}: cannot read the feature map: {exc.strerror}") from None
     return parse_feature_map(data, source=str(path))
@@ -138,7 +141,11 @@ def parse_feature_map(text: str | bytes, *, source: str = "<string>") -> Feature
     where = source
     try:
         data = json.loads(text)
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except json.JSONDecodeError as exc:
+        raise ResultsParseError(f"{where}:{exc.lineno}:{exc.colno}: expected the JSON feature "
+                                f"map that probegen post wrote, found invalid JSON "
+                                f"({exc.msg})") from None
+    except (UnicodeDecodeError, RecursionError) as exc:
         raise ResultsParseError(f"{where}: not a JSON feature map: {exc}") from None
     r = _Reader(where)
     if r.get(data, "format", str) != FORMAT or r.get(data, "version", int) != VERSION:
@@ -168,7 +175,11 @@ class _Reader:
         path = f"{prefix}.{key}" if prefix else key
         if not isinstance(table, dict):
             raise self.fail(prefix or "(top)", "a table", table)
-        value = table.get(key)
+        if key not in table:
+            raise ResultsParseError(f"{self.source}: key '{path}': expected {kind.__name__}, "
+                                    "found nothing (the key is missing; is this a feature map "
+                                    "written by probegen post?)")
+        value = table[key]
         if not isinstance(value, kind) or isinstance(value, bool):
             raise self.fail(path, kind.__name__, value)
         return value

@@ -17,6 +17,7 @@ from probegen.dmis import read_dmis
 from probegen.errors import UnsupportedError
 from probegen.identity import map_identity
 from probegen.machine.profile import MachineProfile
+from probegen.outputs import write_file
 from probegen.planning.collision import MeshObstacle, load_model
 from probegen.post.featuremap import FeatureMap, dumps, feature_map
 from probegen.post.frontend import PostedProgram, post_dmis
@@ -79,8 +80,7 @@ def post_file(program: str | Path, machine: MachineProfile, model: str | Path, *
 
 def write_post(out: PostOutput, target: Path) -> Path:
     """Write the program to ``target`` and its feature map next to it; return the map's path."""
-    target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_bytes(out.text.encode("ascii"))
+    write_file(target, out.text, "the posted program", encoding="ascii")
     map_path = target.with_name(target.stem + MAP_SUFFIX)
-    map_path.write_text(dumps(out.fmap), encoding="utf-8", newline="\n")
+    write_file(map_path, dumps(out.fmap), "the feature map")
     return map_path

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from probegen.errors import ProbegenError
 from probegen.evaluate import NOT_EVALUATED, NOT_OK, OK, UNTOLERANCED
+from probegen.outputs import write_file
 from probegen.report import sections
 from probegen.report.model import Characteristic, Results, read_results
 from probegen.report.numbers import fixed, signed
@@ -69,14 +70,19 @@ def write_report(results_json_path: str | Path, out_path: str | Path, *,
     src, out = Path(results_json_path), Path(out_path)
     try:
         doc = json.loads(src.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ProbegenError(f"{src}: expected the results.json that probegen ingest wrote, "
+                            "found no such file") from None
     except OSError as exc:
         raise ProbegenError(f"{src}: cannot read the results: {exc.strerror}") from exc
     except json.JSONDecodeError as exc:
         raise ProbegenError(f"{src}:{exc.lineno}:{exc.colno}: expected results JSON, "
                             f"found invalid JSON ({exc.msg})") from exc
+    if isinstance(doc, dict) and "features" not in doc:
+        raise ProbegenError(f"{src}: expected the results.json that probegen ingest wrote (with "
+                            f"its 'features' list), found JSON without 'features'")
     page = render_report(doc, title=title, source=str(src))
-    out.write_text(page, encoding="utf-8", newline="\n")
-    return out
+    return write_file(out, page, "the HTML report")
 
 
 def overall_status(res: Results) -> str:

@@ -32,6 +32,7 @@ from typing import BinaryIO, Literal
 import serial
 
 from probegen.errors import ProbegenError
+from probegen.outputs import OutputError, output_folder
 
 __all__ = [
     "DEFAULT_BAUDRATE",
@@ -182,19 +183,36 @@ def _pump(
 
 
 def _open_log(path: Path, append: bool) -> BinaryIO:
-    """Open the raw log for appending, or create it; never truncate."""
+    """Open the raw log for appending, or create it (and its folder); never truncate."""
+    _refuse_folder(path)
+    output_folder(path.parent, "the raw log")
     try:
         return open(path, "ab" if append else "xb")
     except FileExistsError:
         raise _exists_error(path) from None
     except OSError as exc:
-        raise ProbegenError(f"cannot create raw log '{path}': {exc.strerror}") from exc
+        raise OutputError(f"{path}: cannot create the raw log: {exc.strerror}") from exc
+
+
+def _port_problem(exc: Exception) -> str:
+    """What opening a port found, in words: ``no such file or directory`` rather than
+    pyserial's ``[Errno 2] could not open port X: [Errno 2] ...``."""
+    code = exc.args[0] if exc.args and isinstance(exc.args[0], int) else None
+    if code is not None:
+        return os.strerror(code).lower()
+    return str(exc)
+
+
+def _refuse_folder(path: Path) -> None:
+    """A folder where the raw log's file name is meant is an error (not "it exists")."""
+    if path.is_dir():
+        raise OutputError(f"{path}: expected a file name for the raw log, found a folder")
 
 
 def _exists_error(path: Path) -> ProbegenError:
     return ProbegenError(
         f"raw log '{path}' already exists; a capture never overwrites one: "
-        "choose a new file name, or append to it (append=True, a resumed program)"
+        "choose a new file name, or append to it (capture --append, for a resumed program)"
     )
 
 
@@ -276,6 +294,7 @@ def capture(
             opened or the log cannot be written.
     """
     path = Path(out_path)
+    _refuse_folder(path)
     if not append and path.exists():
         raise _exists_error(path)
     try:
@@ -289,7 +308,8 @@ def capture(
             timeout=POLL_S,
         )
     except (serial.SerialException, ValueError) as exc:
-        raise ProbegenError(f"cannot open serial port '{port_url}': {exc}") from exc
+        raise ProbegenError(f"cannot open serial port '{port_url}': expected a serial device "
+                            f"or a pyserial URL, found {_port_problem(exc)}") from exc
     with port:
         return capture_from(
             port,

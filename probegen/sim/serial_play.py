@@ -14,6 +14,7 @@ from pathlib import Path
 from types import TracebackType
 
 from probegen.errors import ProbegenError
+from probegen.outputs import OutputError
 
 
 class PtyLink:
@@ -23,10 +24,20 @@ class PtyLink:
         if not hasattr(os, "openpty"):
             raise ProbegenError("sim --pty: this platform has no pseudo-terminals")
         self.link = Path(link)
+        if self.link.exists() and not self.link.is_symlink():
+            raise OutputError(f"sim --pty {self.link}: expected a new name for the serial "
+                                "port's link (or an old link), found an existing "
+                                f"{'folder' if self.link.is_dir() else 'file'}")
         self.master, self.slave = os.openpty()
-        if self.link.is_symlink() or self.link.exists():
-            self.link.unlink()
-        self.link.symlink_to(os.ttyname(self.slave))
+        try:
+            if self.link.is_symlink():
+                self.link.unlink()
+            self.link.symlink_to(os.ttyname(self.slave))
+        except OSError as exc:
+            os.close(self.master)
+            os.close(self.slave)
+            raise OutputError(f"sim --pty {self.link}: cannot make the serial port's link "
+                                f"there: {exc.strerror}") from None
 
     def play(self, data: bytes, *, delay: float = 1.0, baud: int = 9600, chunk: int = 64,
              linger: float = 0.5) -> None:
