@@ -39,10 +39,7 @@ fuzz: $(STAMP)
 	    $$(grep -l '@given' tests/test_*.py)
 
 goldens: $(STAMP)
-	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q tests/test_golden.py tests/test_bad_inputs.py \
-	    tests/test_bad_cli.py \
-	    tests/test_cad.py tests/test_ingest.py tests/test_dmis_vm.py tests/test_macrob.py \
-	    tests/test_qif.py tests/test_post.py
+	PROBEGEN_REGEN=1 $(BIN)/python -m pytest -q $$(grep -l 'assert_golden\|REGEN' tests/test_*.py)
 	git status --short tests
 
 bench: $(STAMP)

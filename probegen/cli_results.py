@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 from probegen.cli_exit import ExitCode
 from probegen.errors import ProbegenError, ResultsParseError
-from probegen.outputs import read_input
+from probegen.outputs import read_input, write_file
 
 if TYPE_CHECKING:
     from probegen.ingest import Ingested
@@ -68,9 +68,9 @@ def _ingest(args: argparse.Namespace) -> int:
                                 f"found {'none' if not skipped else 'only NOT EVALUATED '}"
                                 f"{', '.join(skipped)}")
         refuse_incomplete_calibration(result)
-        target = Path(args.write_calibration)
         written = result.results[0].calibration(str(args.log), date)
-        target.write_text(calibration_toml(written), encoding="utf-8", newline="\n")
+        target = write_file(args.write_calibration, calibration_toml(written),
+                            "the probe calibration")
         print(f"wrote the probe calibration {target} ({written.fingerprint}"
               f"{'' if date else ', undated: give --calibration-date'})")
     return verdict_code(result.status)
