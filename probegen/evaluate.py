@@ -125,6 +125,11 @@ class Evaluated(Protocol):
         ...
 
     @property
+    def points(self) -> tuple[tuple[float, float, float], ...]:
+        """The contact points, mm."""
+        ...
+
+    @property
     def ok(self) -> bool | None:
         """All toleranced characteristics within limits (None if none is toleranced)."""
         ...

@@ -653,12 +653,15 @@ def _rows_of(r: Evaluated | NotEvaluated, rule: str) -> list[Row]:
     return rows
 
 
+def _head(r: Evaluated, kind: str, rule: str) -> dict[str, Any]:
+    """The keys every feature's JSON starts with: id, kind, the verdict, the touches."""
+    return {"id": r.feature, "kind": kind, "ok": accepted(r.characteristics, rule),
+            "n": len(r.points)}
+
+
 def _planar_json(r: PlanarResult, rule: str) -> dict[str, Any]:
     return {
-        "id": r.feature,
-        "kind": r.kind,
-        "ok": accepted(r.characteristics, rule),
-        "n": len(r.points),
+        **_head(r, r.kind, rule),
         **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
     }
 
@@ -684,10 +687,7 @@ def _measured_json(characteristics: Any, points: Any, directions: Any,
 
 def _feature_json(r: SphereTestResult, rule: str) -> dict[str, Any]:
     return {
-        "id": r.feature,
-        "kind": "sphere_test",
-        "ok": accepted(r.characteristics, rule),
-        "n": len(r.points),
+        **_head(r, "sphere_test", rule),
         "centre": [_f(v) for v in r.fit.centre],
         "diameter": _f(2.0 * r.fit.radius),
         "p_ftu": _f(r.p_ftu),
@@ -699,10 +699,7 @@ def _feature_json(r: SphereTestResult, rule: str) -> dict[str, Any]:
 
 def _revolved_json(r: RevolvedResult, rule: str) -> dict[str, Any]:
     return {
-        "id": r.feature,
-        "kind": r.kind,
-        "ok": accepted(r.characteristics, rule),
-        "n": len(r.points),
+        **_head(r, r.kind, rule),
         "centre": [_f(v) for v in r.centre],
         "axis": [_f(v) for v in r.axis],
         "diameter": _f(r.diameter),

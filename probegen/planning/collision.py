@@ -299,6 +299,21 @@ class _Walker:
         self.centres = {p.id: np.array(p.centre) for p in items}
         self.centres.update({f"{p.id}L": np.array(p.centre) for p in items})
 
+    def follow(self, node: object) -> bool:
+        """Track a node that sets a run-time value or a frame (``Assign``, ``LocalFrame``,
+        ``RestoreFrame``) as the controller would; whether ``node`` was one."""
+        if isinstance(node, ir.Assign):
+            a = self.value(node.a)
+            self.values[node.name] = (a + self.value(node.b)) / 2.0 if node.b is not None \
+                else a + node.offset
+        elif isinstance(node, ir.LocalFrame):
+            self.frames.append((node.name, self.centres[node.feature]))
+        elif isinstance(node, ir.RestoreFrame):
+            self.frames.pop()
+        else:
+            return False
+        return True
+
     def value(self, c: ir.Coord) -> float:
         if isinstance(c, ir.Var):
             if c.name not in self.values:
@@ -369,14 +384,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             progress(1)
         if isinstance(node, ir.FeatureBlock):
             feature = node.feature.id
-        elif isinstance(node, ir.Assign):
-            a = w.value(node.a)
-            w.values[node.name] = (a + w.value(node.b)) / 2.0 if node.b is not None else (
-                a + node.offset)
-        elif isinstance(node, ir.LocalFrame):
-            w.frames.append((node.name, w.centres[node.feature]))
-        elif isinstance(node, ir.RestoreFrame):
-            w.frames.pop()
+        elif w.follow(node):
+            pass
         elif isinstance(node, ir.Move):
             target, extra = w.point(node.target), w.extra(node.target)
             if node.mode is ir.MoveMode.RETRACT:

@@ -28,14 +28,8 @@ def planned_touches(program: ir.Program, plans: Sequence[Any] = ()) -> tuple[Pla
     for node in ir.walk(program.body):
         if isinstance(node, ir.Rotary):
             shift = np.array(node.head_shift)
-        elif isinstance(node, ir.Assign):
-            a = w.value(node.a)
-            w.values[node.name] = (a + w.value(node.b)) / 2.0 if node.b is not None else (
-                a + node.offset)
-        elif isinstance(node, ir.LocalFrame):
-            w.frames.append((node.name, w.centres[node.feature]))
-        elif isinstance(node, ir.RestoreFrame):
-            w.frames.pop()
+        elif w.follow(node):
+            pass
         elif isinstance(node, ir.Touch):
             n = np.array(node.normal)
             contact = w.point(node.contact)
