@@ -54,6 +54,9 @@ class Check:
             ``meanError`` 0: the value is corrected for every known error), or None.
         offset: a profile zone's centre from the nominal, + outside the material (QIF
             ``UnequallyDisposedZone``, ISO 1101 ``UZ``), or None: centred.
+        vector: a Straightness zone's width direction (``ZoneOrientationVector`` of its
+            non-diametrical zone), a LineProfile's normal to the plane its line lies in
+            (the nominal's ``Vector``, required there); unit, or None.
         method: how a form value was evaluated (``Characteristic.method``: "minimum
             zone", "least squares"; QIF ``SubstituteFeatureAlgorithm`` MINMAX,
             LEASTSQUARES on the item), or "".
@@ -71,6 +74,7 @@ class Check:
     material: str = "NONE"
     u: float | None = None
     offset: float | None = None
+    vector: tuple[float, float, float] | None = None
     method: str = ""
 
 
@@ -123,6 +127,10 @@ def _definition(b: QifBuilder, check: Check) -> int:
     if check.kind == "Position":
         sub(element, "MaterialCondition", check.material)
         sub(sub(element, "ZoneShape"), check.zone_shape)
+    if check.kind == "Straightness":
+        zone = sub(sub(element, "ZoneShape"), "NonDiametricalZone")
+        if check.vector is not None:
+            sub(zone, "ZoneOrientationVector", vec(check.vector))
     return ident
 
 
@@ -145,6 +153,8 @@ def _nominal(b: QifBuilder, check: Check, definition: int, links: Links) -> int:
         ref_list(element, "FeatureNominalIds", [links.feature_nominal])
     if check.kind in SIZE_KINDS and check.target is not None:
         sub(element, "TargetValue", num(check.target))
+    if check.kind == "LineProfile":
+        sub(element, "Vector", vec(check.vector or (0.0, 0.0, 1.0)))
     return ident
 
 

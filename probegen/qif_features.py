@@ -218,6 +218,9 @@ def planar_qif(b: QifBuilder, r: PlanarResult, device: int, sensor: int,
     else:
         _plane_geometry(element, r, chars)
     links = Links(feature_measurement=measurement, device=device)
+    normal = r.directions[0]
+    # a line's straightness is in XY: its zone is across the face, in the plane z = const
+    plane = (0.0, 0.0, 1.0) if r.kind == "line" else None
     out = []
     for c in r.characteristics:
         name, verdict = f"{r.feature} {c.name}", status(c.accepted(rule))
@@ -227,11 +230,11 @@ def planar_qif(b: QifBuilder, r: PlanarResult, device: int, sensor: int,
         elif c.lower is not None and c.upper is not None and c.name == "DIST":
             offset = 0.5 * (c.upper + c.lower)
             check = Check(profile, name, 2.0 * abs(c.measured - offset), verdict,
-                          zone=c.upper - c.lower, offset=offset,
+                          zone=c.upper - c.lower, offset=offset, vector=plane,
                           u=None if c.u is None else 2.0 * c.u)
         elif c.upper is not None and c.name == "FORM":
             check = Check(form_kind, name, c.measured, verdict, zone=c.upper, u=c.u,
-                          method=c.method)
+                          vector=normal if r.kind == "line" else None, method=c.method)
         else:
             continue
         out.append(add_characteristic(b, check, links))

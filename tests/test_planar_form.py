@@ -71,11 +71,12 @@ def test_straightness_minimum_zone_of_a_known_zone() -> None:
         assert ls == pytest.approx(fit_line_2d(xy).form, abs=1e-12) and ls >= zone
 
 
-def faces_spec(tmp: Path, form: str) -> Path:
-    """The lines-and-planes spec with ``form`` TOML added to both tolerance tables."""
-    text = FACES.format(repo=REPO, low=-0.5).replace(
+def faces_spec(tmp: Path, form: str, low: float = -0.5) -> Path:
+    """The lines-and-planes spec with ``form`` TOML added to both tolerance tables
+    (TOP's position ``[low, 0.5]``)."""
+    text = FACES.format(repo=REPO, low=low).replace(
         "angle = 1.0 }", f"angle = 1.0, {form} }}").replace(
-        "[-0.5, 0.5] }", f"[-0.5, 0.5], {form} }}")
+        ", 0.5] }", f", 0.5], {form} }}")
     path = tmp / "faces.toml"
     path.write_text(text)
     return path
