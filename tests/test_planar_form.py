@@ -146,3 +146,17 @@ def test_form_tolerance_needs_enough_contacts(tmp_path: Path) -> None:
     with pytest.raises(SpecError, match=r"contacts: a form tolerance needs at least 4 "
                                         r"contacts on a plane, found 3"):
         load_spec(spec)
+
+
+def test_a_toleranced_form_cut_short_is_not_evaluated(faces_log: Path,  # noqa: F811
+                                                      tmp_path: Path) -> None:
+    """TOP's fourth touch missing: its toleranced FORM is listed NOT EVALUATED (never
+    dropped because three touches have no form)."""
+    kept = [line for line in faces_log.read_text().splitlines()
+            if not line.startswith(("PT TOP 4", "PGEND"))]
+    log = tmp_path / "cut.log"
+    log.write_text("\n".join(kept) + "\n")
+    code, chars = ingest(log, faces_spec(tmp_path, "form = 0.02"), tmp_path)
+    assert code == ExitCode.INCOMPLETE
+    assert (chars["TOP FORM"]["status"], chars["TOP FORM"]["upper"]) == ("NOT EVALUATED", 0.02)
+    assert chars["EDGE FORM"]["status"] == "OK"
