@@ -10,9 +10,13 @@ feature with actions shows in the results what the control decided on:
   (``[lower, upper]``).
 * ``ANGLE`` (lines): the fitted direction in XY, degrees, against the nominal one (start
   to end); the deviation is taken modulo 180 degrees, toleranced by ``angle`` (±).
-* ``FORM``: flatness of a plane (least-squares plane, range of the residuals; from 4
-  touches) or straightness of a line (least-squares line in XY; from 3 touches), mm,
-  not toleranced.
+* ``FORM``: flatness of a plane (from 4 touches) or straightness of a line in XY (from
+  3 touches), mm: the width of the ISO 1101 minimum zone (two parallel planes, two
+  parallel lines; ``geometry.minimum_zone``), or with ``form_method =
+  "least_squares"`` the range of the residuals about the least-squares plane or line
+  (never narrower); the characteristic's ``method`` names which.  Toleranced by
+  ``form`` (an upper limit).  The in-process check of a line or plane computes no
+  form: this value is the offline evaluation's alone.
 
 ``residuals`` are each contact point's distance from the nominal face along ``n`` minus
 ``DIST``.
@@ -26,14 +30,16 @@ import numpy as np
 
 from probegen.compensate import ProbeCalibration, compensate
 from probegen.evaluate import Characteristic
+from probegen.geometry import minimum_zone
 from probegen.geometry.fits import fit_line_2d, fit_plane
 from probegen.ingest_actions import evaluate_check
 from probegen.ir_actions import Check, point_index
+from probegen.spec_actions import FORM_MIN_POINTS, PlanarTolerance
 
 Vec3 = tuple[float, float, float]
 
-FORM_MIN_POINTS = {"plane": 4, "line": 3}
-"""Fewest touches the form is reported from: one more than the fit's parameters."""
+NO_TOLERANCE = PlanarTolerance()
+"""No form limit, the minimum zone."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,7 +70,8 @@ class PlanarResult:
 
 
 def evaluate_planar(check: Check, balls: dict[int, Vec3], *,
-                    radius: float | ProbeCalibration | None = None) -> PlanarResult:
+                    radius: float | ProbeCalibration | None = None,
+                    tolerance: PlanarTolerance = NO_TOLERANCE) -> PlanarResult:
     """Evaluate a line or plane from its ball centres by touch index.
 
     Args:
@@ -72,6 +79,8 @@ def evaluate_planar(check: Check, balls: dict[int, Vec3], *,
         balls: the ball centre of every touch of the check, mm.
         radius: what the contact points are compensated with (default the check's
             ball radius).
+        tolerance: the feature's form limit and form method (its position and angle
+            limits are the check's).
 
     Raises:
         ProbegenError: a touch missing, or touches that fit no line.
@@ -93,11 +102,28 @@ def evaluate_planar(check: Check, balls: dict[int, Vec3], *,
         chars.append(Characteristic("ANGLE", check.direction + a, check.direction, a,
                                     None if top is None else -top, top))
     if len(order) >= FORM_MIN_POINTS[check.fit]:
-        form = (fit_line_2d(contacts[:, :2]) if check.fit == "line"
-                else fit_plane(contacts)).form
-        chars.append(Characteristic("FORM", form, 0.0, form))
+        form, method = planar_form(check.fit, contacts, tolerance.form_method)
+        chars.append(Characteristic("FORM", form, 0.0, form, None, tolerance.form,
+                                    method=method))
     return PlanarResult(check.feature, check.fit, _rows(contacts), _rows(normals),
                         tuple(float(v - dist) for v in along), tuple(chars))
+
+
+def planar_form(kind: str, contacts: np.ndarray, form_method: str) -> tuple[float, str]:
+    """The flatness (``kind`` ``plane``, ``contacts (n, 3)``) or straightness in XY
+    (``line``) of the contact points, mm, and the method's name: the minimum zone
+    started from the least-squares fit, or (``form_method = "least_squares"``) the
+    range of the least-squares residuals."""
+    least_squares = form_method == "least_squares"
+    if kind == "line":
+        line = fit_line_2d(contacts[:, :2])
+        form = line.form if least_squares else minimum_zone.straightness_2d(
+            contacts[:, :2], line.point, line.direction)
+    else:
+        plane = fit_plane(contacts)
+        form = plane.form if least_squares else minimum_zone.flatness(
+            contacts, plane.point, plane.normal)
+    return form, minimum_zone.LABELS[form_method]
 
 
 def _rows(a: np.ndarray) -> tuple[Vec3, ...]:

@@ -375,12 +375,13 @@ def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
     machine = dataclasses.replace(spec.machine, calibration=calibration)
     check = planar_fit(plan_planar(feature, spec.model, machine), machine)
     tol = feature.tolerance
-    names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)))
+    names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)),
+                    ("FORM", _upper(tol.form)))
     planned = range(1, len(feature.contacts) + 1)
     reason = gaps.reason(feature.id, planned)
     balls = {k: touches[(feature.id, k)] for k in planned if (feature.id, k) in touches}
     return _judge(feature.id, feature.kind, reason, names, None if reason else (
-        lambda: evaluate_planar(check, balls, radius=calibration)))
+        lambda: evaluate_planar(check, balls, radius=calibration, tolerance=tol)))
 
 
 def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],

@@ -1,7 +1,7 @@
 """QIF 3 results export: ``probegen qif`` (see ``docs/qif.md``).
 
 * :func:`ingested_to_qif`: the results of ``probegen ingest`` (sphere tests, circles,
-  cylinders, cones, spheres, tori, free-form points) as a QIF document: features,
+  cylinders, cones, spheres, tori, free-form points, lines, planes) as a QIF document: features,
   measured points, characteristics, their statuses and standard uncertainties.
 * :func:`dmis_output_to_qif`: a DMIS output file's feature and tolerance actuals as a QIF
   document, with a list of what could not be converted.
@@ -85,7 +85,7 @@ def ingested_to_qif(ing: Ingested, *, spec: Spec | None = None,
     """
     from probegen.qif_sphere import sphere_results_qif
 
-    if not (ing.results or ing.revolved or ing.freeform) and not any(
+    if not (ing.results or ing.revolved or ing.freeform or ing.planar) and not any(
             n.kind == "sphere_test" and n.partial is not None for n in ing.not_evaluated):
         raise ProbegenError(f"{ing.source}: expected evaluated features to export, found none")
     return sphere_results_qif(ing, spec=spec, application=APPLICATION,

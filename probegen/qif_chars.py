@@ -19,9 +19,16 @@ SIZE_KINDS = frozenset({"Diameter", "SphericalDiameter", "Angle"})
 """Size characteristics: a target value and a bilateral tolerance on the deviation
 (``Angle``: in the file's angular unit, degrees)."""
 
-ZONE_KINDS = frozenset({"Flatness", "Cylindricity", "Circularity", "Sphericity", "Position",
-                        "Conicity", "Toroidicity", "PointProfile"})
+ZONE_KINDS = frozenset({"Flatness", "Straightness", "Cylindricity", "Circularity",
+                        "Sphericity", "Position", "Conicity", "Toroidicity", "PointProfile",
+                        "LineProfile", "SurfaceProfile"})
 """Geometric characteristics: a tolerance zone (QIF requires its value)."""
+
+PROFILE_KINDS = frozenset({"PointProfile", "LineProfile", "SurfaceProfile"})
+"""Zone kinds whose zone may be offset from the nominal (ISO 1101 ``UZ``)."""
+
+ALGORITHMS = {"minimum zone": "MINMAX", "least squares": "LEASTSQUARES"}
+"""A characteristic's ``method`` -> QIF ``SubstituteFeatureAlgorithmEnum``."""
 
 ZONE_SHAPES = ("SphericalZone", "DiametricalZone")
 """Position zone shapes written (a sphere's centre: spherical; an axis: diametrical)."""
@@ -45,6 +52,14 @@ class Check:
         material: the position's material condition (QIF ``MaterialModifierEnum``).
         u: the value's combined standard uncertainty (QIF ``combinedUncertainty``, with
             ``meanError`` 0: the value is corrected for every known error), or None.
+        offset: a profile zone's centre from the nominal, + outside the material (QIF
+            ``UnequallyDisposedZone``, ISO 1101 ``UZ``), or None: centred.
+        vector: a Straightness zone's width direction (``ZoneOrientationVector`` of its
+            non-diametrical zone), a LineProfile's normal to the plane its line lies in
+            (the nominal's ``Vector``, required there); unit, or None.
+        method: how a form value was evaluated (``Characteristic.method``: "minimum
+            zone", "least squares"; QIF ``SubstituteFeatureAlgorithm`` MINMAX,
+            LEASTSQUARES on the item), or "".
     """
 
     kind: str
@@ -58,6 +73,9 @@ class Check:
     zone_shape: str = "DiametricalZone"
     material: str = "NONE"
     u: float | None = None
+    offset: float | None = None
+    vector: tuple[float, float, float] | None = None
+    method: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,9 +122,15 @@ def _definition(b: QifBuilder, check: Check) -> int:
     if check.zone is None:
         raise ValueError(f"{check.kind} {check.name}: a zone characteristic needs its zone")
     sub(element, "ToleranceValue", num(check.zone))
+    if check.kind in PROFILE_KINDS and check.offset:
+        sub(element, "UnequallyDisposedZone", num(check.offset))
     if check.kind == "Position":
         sub(element, "MaterialCondition", check.material)
         sub(sub(element, "ZoneShape"), check.zone_shape)
+    if check.kind == "Straightness":
+        zone = sub(sub(element, "ZoneShape"), "NonDiametricalZone")
+        if check.vector is not None:
+            sub(zone, "ZoneOrientationVector", vec(check.vector))
     return ident
 
 
@@ -129,6 +153,8 @@ def _nominal(b: QifBuilder, check: Check, definition: int, links: Links) -> int:
         ref_list(element, "FeatureNominalIds", [links.feature_nominal])
     if check.kind in SIZE_KINDS and check.target is not None:
         sub(element, "TargetValue", num(check.target))
+    if check.kind == "LineProfile":
+        sub(element, "Vector", vec(check.vector or (0.0, 0.0, 1.0)))
     return ident
 
 
@@ -137,6 +163,9 @@ def _item(b: QifBuilder, check: Check, nominal: int, links: Links) -> int:
     sub(element, "Name", check.name)
     if links.feature_item is not None:
         ref_list(element, "FeatureItemIds", [links.feature_item])
+    if check.method:
+        sub(sub(element, "SubstituteFeatureAlgorithm"), "SubstituteFeatureAlgorithmEnum",
+            ALGORITHMS[check.method])
     if links.device is not None:
         ref_list(element, "MeasurementDeviceIds", [links.device])
     sub(element, "CharacteristicNominalId", str(nominal))

@@ -1,4 +1,4 @@
-"""Revolved and free-form results of ``probegen ingest`` in a QIF 3 document.
+"""Revolved, planar and free-form results of ``probegen ingest`` in a QIF 3 document.
 
 Each revolved feature (method M2) becomes a ``MeasuredPointSet`` of its contact points
 (with their fitted outward normals, ``Compensated`` true) and a feature measurement:
@@ -21,6 +21,22 @@ toleranced (always on a cone: they are its sizes), and when toleranced ``POS``
 Cylindricity, Conicity, Sphericity, Toroidicity) and ``RON_Sk`` (Circularity).  A
 toleranced ``TAPER`` has no QIF counterpart here and is named in the notes.
 
+A line or plane (``evaluate_planar``): its contact points as a ``MeasuredPointSet``
+(with the nominal outward normal) and a ``LineFeatureMeasurement`` (Location: the
+first touch projected on the measured line, Direction, Length: from the first touch
+to the last, Normal: the face's nominal normal, Form) or ``PlaneFeatureMeasurement``
+(Location: the contact points' centroid, Normal: the least-squares normal from 3
+touches, else the nominal one, Form).  Its characteristics: ``ANGLE`` (Angle, the
+line's direction in XY against the nominal) always on a line, and when toleranced
+``DIST`` (LineProfile, SurfaceProfile: the zone ``upper − lower`` about the nominal
+face, offset by ``(upper + lower)/2`` as ``UnequallyDisposedZone`` when not centred;
+the value ``2·|DIST − offset|``, the zone so placed the face's mean position needs,
+so the status is ``lower <= DIST <= upper``; the form is the separate ``FORM``) and
+``FORM`` (Straightness, Flatness).
+
+Every form characteristic names its method on its item (``SubstituteFeatureAlgorithm``
+MINMAX for the ISO 1101 minimum zone, LEASTSQUARES for least squares).
+
 A free-form feature (method M3): its contact points as a ``MeasuredPointSet``, a
 ``PointFeatureMeasurement`` per guide point (``<id> E<g>``: the contact point and the
 nominal normal) and, when toleranced, a ``PointProfile`` characteristic per guide point
@@ -37,6 +53,10 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from probegen.errors import ProbegenError
+from probegen.geometry.fits import fit_plane
 from probegen.qif_chars import (
     Check,
     Links,
@@ -50,6 +70,7 @@ from probegen.qif_xml import QifBuilder, point_lines, sub, vec
 if TYPE_CHECKING:
     from probegen.evaluate import Characteristic
     from probegen.evaluate_freeform import FreeformResult
+    from probegen.evaluate_planar import PlanarResult
     from probegen.evaluate_revolved import RevolvedResult
 
 FEATURE_TAGS = {"circle": "Circle", "cylinder": "Cylinder", "cone": "Cone",
@@ -148,7 +169,8 @@ def _checks(r: RevolvedResult, chars: dict[str, Characteristic], rule: str,
                              zone_shape=shape, u=c.u))
         elif c.name == "FORM" or c.name.startswith("RON_S"):
             kind = FORM_KINDS[r.kind] if c.name == "FORM" else "Circularity"
-            out.append(Check(kind, name, c.measured, verdict, zone=c.upper, u=c.u))
+            out.append(Check(kind, name, c.measured, verdict, zone=c.upper, u=c.u,
+                             method=c.method))
         else:
             notes.append(f"{name}: no QIF characteristic for {c.name}; its value "
                          f"{c.measured:.4f} ({verdict}) is in results.json")
@@ -174,3 +196,82 @@ def freeform_qif(b: QifBuilder, r: FreeformResult, device: int, sensor: int,
                                                       device=device)))
     return out
 
+
+
+PLANAR_TAGS = {"line": ("Line", "LineProfile", "Straightness"),
+               "plane": ("Plane", "SurfaceProfile", "Flatness")}
+"""Planar kind -> QIF feature stem, the characteristic of ``DIST``, of ``FORM``."""
+
+
+def planar_qif(b: QifBuilder, r: PlanarResult, device: int, sensor: int,
+               rule: str) -> list[int]:
+    """Write one line or plane (see the module doc); return its characteristic nominal
+    ids."""
+    stem, profile, form_kind = PLANAR_TAGS[r.kind]
+    points = point_set(b, r.points, r.directions, device, sensor)
+    element, measurement = b.add("MeasuredFeatures", f"{stem}FeatureMeasurement")
+    sub(element, "FeatureName", r.feature)
+    sub(sub(element, "PointList", n="1"), "WholePointSetId", str(points))
+    chars = {c.name: c for c in r.characteristics}
+    if r.kind == "line":
+        _line_geometry(element, r, chars)
+    else:
+        _plane_geometry(element, r, chars)
+    links = Links(feature_measurement=measurement, device=device)
+    normal = r.directions[0]
+    # a line's straightness is in XY: its zone is across the face, in the plane z = const
+    plane = (0.0, 0.0, 1.0) if r.kind == "line" else None
+    out = []
+    for c in r.characteristics:
+        name, verdict = f"{r.feature} {c.name}", status(c.accepted(rule))
+        if c.name == "ANGLE":
+            check = Check("Angle", name, c.measured, verdict, target=c.nominal,
+                          lower=c.lower, upper=c.upper, u=c.u)
+        elif c.lower is not None and c.upper is not None and c.name == "DIST":
+            offset = 0.5 * (c.upper + c.lower)
+            check = Check(profile, name, 2.0 * abs(c.measured - offset), verdict,
+                          zone=c.upper - c.lower, offset=offset, vector=plane,
+                          u=None if c.u is None else 2.0 * c.u)
+        elif c.upper is not None and c.name == "FORM":
+            check = Check(form_kind, name, c.measured, verdict, zone=c.upper, u=c.u,
+                          vector=normal if r.kind == "line" else None, method=c.method)
+        else:
+            continue
+        out.append(add_characteristic(b, check, links))
+    return out
+
+
+def _line_geometry(element: ET.Element, r: PlanarResult,
+                   chars: dict[str, Characteristic]) -> None:
+    """Location (the first touch on the measured line), Direction, Length, Normal, Form."""
+    p = np.asarray(r.points, dtype=np.float64)
+    theta = math.radians(chars["ANGLE"].measured)
+    d = np.array([math.cos(theta), math.sin(theta), 0.0])
+    centre = p.mean(axis=0)
+    start = centre + d * float((p[0] - centre) @ d)
+    u = _u(chars, "DIST")
+    measured_point(element, "Location", [float(v) for v in start], (u, u, u))
+    sub(element, "Direction", vec([float(v) for v in d]))
+    measured_value(element, "Length", float((p[-1] - p[0]) @ d), u)
+    sub(element, "Normal", vec(r.directions[0]))
+    if "FORM" in chars:
+        measured_value(element, "Form", chars["FORM"].measured, _u(chars, "FORM"))
+
+
+def _plane_geometry(element: ET.Element, r: PlanarResult,
+                    chars: dict[str, Characteristic]) -> None:
+    """Location (the centroid), Normal (least squares from 3 touches), Form."""
+    p = np.asarray(r.points, dtype=np.float64)
+    u = _u(chars, "DIST")
+    measured_point(element, "Location", [float(v) for v in p.mean(axis=0)], (u, u, u))
+    nominal = np.asarray(r.directions[0], dtype=np.float64)
+    normal = nominal
+    if len(p) >= 3:
+        try:
+            fitted = np.asarray(fit_plane(p).normal, dtype=np.float64)
+            normal = fitted if fitted @ nominal >= 0.0 else -fitted
+        except ProbegenError:  # collinear touches: the nominal normal
+            pass
+    sub(element, "Normal", vec([float(v) for v in normal]))
+    if "FORM" in chars:
+        measured_value(element, "Form", chars["FORM"].measured, _u(chars, "FORM"))

@@ -68,7 +68,7 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
                        created: datetime | None, qpid: str | None) -> str:
     """Build the QIF text of an ingest (see :func:`probegen.qif.ingested_to_qif`): the
     sphere tests here, the other kinds by :mod:`probegen.qif_features`."""
-    from probegen.qif_features import freeform_qif, revolved_qif
+    from probegen.qif_features import freeform_qif, planar_qif, revolved_qif
 
     b = QifBuilder(application, version, created, qpid)
     begin_document(b, standard=STANDARD if ing.results else GPS_STANDARD, source=ing.source,
@@ -90,6 +90,9 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
     for freeform in ing.freeform:
         characteristic_nominals += freeform_qif(b, freeform, resources.device,
                                                 resources.sensor, ing.rule)
+    for planar in ing.planar:
+        characteristic_nominals += planar_qif(b, planar, resources.device,
+                                              resources.sensor, ing.rule)
     for n in ing.not_evaluated:  # none of them may let the inspection PASS
         b.statuses.append(NOT_ANALYZED)
         b.notes.append(f"feature {n.feature}: NOT EVALUATED: {n.reason}")

@@ -72,12 +72,16 @@ from pathlib import Path
 from probegen.constants import MM_PER_INCH
 from probegen.errors import ProbegenError, SpecError, did_you_mean
 from probegen.machine.profile import MachineProfile, load_profile
-from probegen.spec_actions import PLANAR_KINDS, Actions, PlanarSpec, read_actions, read_planar
+from probegen.spec_actions import (
+    FORM_METHODS,
+    PLANAR_KINDS,
+    Actions,
+    PlanarSpec,
+    read_actions,
+    read_planar,
+)
 from probegen.tomlread import Table, load_toml
 from probegen.uncertainty import DECISION_RULES
-
-FORM_METHODS = ("minimum_zone", "least_squares")
-"""Values of ``form_method`` (``geometry.minimum_zone``)."""
 
 Vec3 = tuple[float, float, float]
 
@@ -388,7 +392,7 @@ def _feature(t: Table, k: float, form_method: str = "minimum_zone") -> Feature:
     elif kind == "freeform":
         feature = _freeform(t, fid, k)
     elif kind in PLANAR_KINDS:
-        feature = read_planar(t, fid, kind, k)
+        feature = read_planar(t, fid, kind, k, form_method)
     else:
         feature = _revolved(t, fid, kind, k, form_method)
     t.done()

@@ -17,7 +17,10 @@ and the planar kinds, touched at given nominal contact points on one planar face
     at = [50.0, 0.0, 25.0]                 # or face = N: a planar face of the model
     contacts = [[20.0, 0.0, 25.0], [80.0, 0.0, 25.0]]
     retract = 4.0
-    tolerance = { position = [-0.1, 0.1], angle = 1.0 }   # mm along the normal; degrees
+    tolerance = { position = [-0.1, 0.1], angle = 1.0, form = 0.02 }
+    # position: mm along the normal; angle: degrees; form: flatness of a plane,
+    # straightness of a line, mm (ISO 1101 minimum zone unless form_method =
+    # "least_squares" here or in [evaluation])
 
 Lengths are in ``[part] units`` and converted to mm (``k``); this module only reads
 the tables, :mod:`probegen.planning.actions` checks them against the geometry.
@@ -36,6 +39,11 @@ Vec3 = tuple[float, float, float]
 
 PLANAR_KINDS = ("line", "plane")
 """Feature kinds touched at given points of one planar face."""
+FORM_MIN_POINTS = {"plane": 4, "line": 3}
+"""Fewest touches the form of a plane or line is evaluated from: one more than its
+fit's parameters (a ``form`` tolerance needs as many contacts)."""
+FORM_METHODS = ("minimum_zone", "least_squares")
+"""Values of ``form_method`` (``geometry.minimum_zone``)."""
 ON_FAIL = ("alarm", "stop", "continue", "flag")
 """What the program does when a feature is out of tolerance."""
 TOOL_OFFSETS = ("radius", "length")
@@ -110,10 +118,18 @@ class Actions:
 class PlanarTolerance:
     """Limits of a line or plane: ``position`` the lowest and highest deviation along
     the face's outward normal (mm), ``angle`` the largest angle of a line from its
-    nominal direction (degrees); None = not checked."""
+    nominal direction (degrees), ``form`` the largest flatness of a plane or
+    straightness of a line (mm); None = not checked.  ``form_method``: how the form is
+    evaluated, ``minimum_zone`` (ISO 1101) or ``least_squares`` (the range of the
+    residuals about the least-squares fit).
+
+    The form is evaluated offline only (``ingest``): the in-process check of a line or
+    plane has no form value, so ``form`` never enters its run-time limits."""
 
     position: tuple[float, float] | None = None
     angle: float | None = None
+    form: float | None = None
+    form_method: str = "minimum_zone"
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,8 +215,10 @@ def _align(t: Table) -> AlignAction | None:
     return AlignAction(mode, variable)
 
 
-def read_planar(t: Table, fid: str, kind: str, k: float) -> PlanarSpec:
-    """A ``line`` or ``plane`` feature table."""
+def read_planar(t: Table, fid: str, kind: str, k: float,
+                form_method: str = "minimum_zone") -> PlanarSpec:
+    """A ``line`` or ``plane`` feature table (``form_method``: the ``[evaluation]``
+    default, see ``PlanarTolerance``)."""
     face = t.get_int("face", minimum=1)
     at = t.get_vec("at")
     given = [key for key, v in (("face", face), ("at", at)) if v is not None]
@@ -209,7 +227,11 @@ def read_planar(t: Table, fid: str, kind: str, k: float) -> PlanarSpec:
                         f"found {', '.join(given) or 'none'}")
     contacts = _contacts(t, k, 2 if kind == "line" else 1)
     retract = t.get_float("retract", positive=True)
-    tolerance = _planar_tolerance(t.table("tolerance"), k, kind)
+    tolerance = _planar_tolerance(t.table("tolerance"), k, kind, form_method)
+    if tolerance.form is not None and len(contacts) < FORM_MIN_POINTS[kind]:
+        raise SpecError(f"{t.where('contacts')}: a form tolerance needs at least "
+                        f"{FORM_MIN_POINTS[kind]} contacts on a {kind}, found "
+                        f"{len(contacts)}")
     actions = read_actions(t, k, "XYZ")
     if actions.align is not None and kind != "line":
         raise SpecError(f"{t.where('align')}: align needs a line feature, found kind {kind}")
@@ -230,8 +252,10 @@ def _contacts(t: Table, k: float, least: int) -> tuple[Vec3, ...]:
     return tuple((float(p[0]) * k, float(p[1]) * k, float(p[2]) * k) for p in value)
 
 
-def _planar_tolerance(t: Table, k: float, kind: str) -> PlanarTolerance:
+def _planar_tolerance(t: Table, k: float, kind: str, form_method: str) -> PlanarTolerance:
     position = t.get_limits("position", k)
     angle = t.get_float("angle", positive=True, maximum=45.0) if kind == "line" else None
+    form = t.get_float("form", positive=True)
+    method = t.get_str("form_method", form_method, choices=FORM_METHODS) or form_method
     t.done()
-    return PlanarTolerance(position, angle)
+    return PlanarTolerance(position, angle, None if form is None else form * k, method)

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, SHARED
+from test_no_false_ok import faces_log  # noqa: F401  (the module-scoped fixture)
+from test_planar_form import bumped, faces_spec
 from test_uncertainty import BORE, bore_centres
 
 from probegen.evaluate_freeform import NominalPoint, evaluate_freeform
@@ -239,3 +241,56 @@ def test_cli_exports_a_revolved_log(in_repo: Path, tmp_path: Path,
     notes = [a.get("value") or "" for a in
              root.iterfind(".//q:MeasurementResults/q:Attributes/*", NS)]
     assert any("decision rule guard_band" in n for n in notes)
+
+
+def test_cli_exports_lines_and_planes(faces_log: Path, tmp_path: Path,  # noqa: F811
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """The lines-and-planes spec on the virtual machine with planted form errors
+    (``test_planar_form``): a LineFeatureMeasurement and a PlaneFeatureMeasurement,
+    their position as a line and surface profile about the nominal face (TOP's zone
+    ``[-0.2, 0.5]`` offset by 0.15), the angle, straightness and flatness with their
+    method; schema-valid."""
+    from probegen.cli import main
+
+    out = tmp_path / "faces.qif"
+    spec = faces_spec(tmp_path, "form = 0.02", low=-0.2)
+    assert main(["qif", str(bumped(faces_log, tmp_path)), "--spec", str(spec), "-o", str(out),
+                 "--validate", "--schema", str(SCHEMA / "QIFDocument.xsd")]) == 0
+    assert "valid against the QIF 3 schema" in capsys.readouterr().out
+    root = _doc(out.read_text())
+    line = root.find(".//q:LineFeatureMeasurement", NS)
+    plane = root.find(".//q:PlaneFeatureMeasurement", NS)
+    assert line is not None and plane is not None
+    assert line.findtext("q:FeatureName", namespaces=NS) == "EDGE"
+    assert [float(v) for v in (line.findtext("q:Normal", namespaces=NS) or "").split()] == [
+        0.0, -1.0, 0.0]
+    assert float(line.findtext("q:Form", namespaces=NS) or "nan") == pytest.approx(0.015,
+                                                                                  abs=1e-4)
+    assert float(plane.findtext("q:Form", namespaces=NS) or "nan") == pytest.approx(0.03,
+                                                                                   abs=1e-4)
+    normal = [float(v) for v in (plane.findtext("q:Normal", namespaces=NS) or "").split()]
+    assert normal[2] > 0.999
+
+    def value(name: str) -> tuple[float, str]:
+        m = _measurement(root, name)
+        return (float(m.findtext("q:Value", namespaces=NS) or "nan"),
+                m.findtext(".//q:CharacteristicStatusEnum", namespaces=NS) or "")
+
+    # DIST 0.3 + 0.05/4 (one touch of four 50 µm high) in [-0.2, 0.5]: 2·|0.3125 − 0.15|
+    top, top_status = value("TOP DIST")
+    assert top == pytest.approx(0.325, abs=2e-4) and top_status == "PASS"
+    assert value("TOP FORM")[1] == "FAIL" and value("EDGE FORM")[1] == "PASS"
+    assert value("EDGE ANGLE")[1] == "PASS"
+    kinds = {e.findtext("q:Name", namespaces=NS): e.tag.split("}")[1]
+             for e in root.iterfind(".//q:CharacteristicItems/*", NS)}
+    assert kinds == {"EDGE DIST": "LineProfileCharacteristicItem",
+                     "EDGE ANGLE": "AngleCharacteristicItem",
+                     "EDGE FORM": "StraightnessCharacteristicItem",
+                     "TOP DIST": "SurfaceProfileCharacteristicItem",
+                     "TOP FORM": "FlatnessCharacteristicItem"}
+    offsets = [float(e.text or "nan") for e in root.iterfind(".//q:UnequallyDisposedZone", NS)]
+    assert offsets == [pytest.approx(0.15)]  # EDGE's [-1, 1] is centred
+    methods = [e.text for e in root.iterfind(".//q:SubstituteFeatureAlgorithmEnum", NS)]
+    assert methods == ["MINMAX", "MINMAX"]
+    status = root.findtext(".//q:InspectionStatus/q:InspectionStatusEnum", namespaces=NS)
+    assert status == "FAIL"

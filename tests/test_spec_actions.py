@@ -40,6 +40,27 @@ def test_sample_actions_are_read(tmp_path: Path) -> None:
     assert boss.actions.on_fail == "flag" and boss.actions.flag == 510
 
 
+def test_form_tolerance_of_a_face(tmp_path: Path) -> None:
+    """``form`` of a plane in the part's units, the method from ``[evaluation]`` unless
+    the feature names its own."""
+    top = 'tolerance = { position = [-0.5, 0.5] }'
+    assert top in BASE
+    three = "[20.0, 80.0, 50.0]]"
+    assert three in BASE
+    text = BASE.replace(top, 'tolerance = { position = [-0.5, 0.5], form = 0.001 }').replace(
+        three, "[20.0, 80.0, 50.0], [30.0, 30.0, 50.0]]")
+    spec = load(tmp_path, text.replace('units = "mm"', 'units = "inch"'))
+    tol = spec.features[1].tolerance  # type: ignore[attr-defined]
+    assert tol.form == pytest.approx(0.0254) and tol.form_method == "minimum_zone"
+    spec = load(tmp_path, text.replace("[program]", '[evaluation]\nform_method = '
+                                       '"least_squares"\n\n[program]'))
+    assert spec.features[1].tolerance.form_method == "least_squares"  # type: ignore[attr-defined]
+    spec = load(tmp_path, text.replace("form = 0.001", 'form = 0.001, form_method = '
+                                       '"least_squares"'))
+    assert spec.features[1].tolerance.form_method == "least_squares"  # type: ignore[attr-defined]
+    assert spec.features[0].tolerance.form_method == "minimum_zone"  # type: ignore[attr-defined]
+
+
 def test_inch_spec_scales_corrections(tmp_path: Path) -> None:
     spec = load(tmp_path, BASE.replace('units = "mm"', 'units = "inch"'))
     bore = spec.features[2]  # type: ignore[attr-defined]
@@ -67,6 +88,12 @@ def test_work_offsets_accepted(tmp_path: Path, offset: str) -> None:
     ("tolerance = { angle = 1.0 }", "tolerance = { angle = 50.0 }", "a number <= 45"),
     ("contacts = [[10.0, 0.0, 25.0], [90.0, 0.0, 25.0]]", "contacts = [[10.0, 0.0, 25.0]]",
      "an array of 2-50 points"),
+    ("tolerance = { angle = 1.0 }", "tolerance = { angle = 1.0, form = 0.0 }",
+     "tolerance.form: expected a positive number, found 0.0"),
+    ("tolerance = { angle = 1.0 }", 'tolerance = { angle = 1.0, form_method = "minzone" }',
+     "minimum_zone"),
+    ("tolerance = { angle = 1.0 }", "tolerance = { angle = 1.0, form = 0.01 }",
+     r"contacts: a form tolerance needs at least 3 contacts on a line, found 2"),
 ])
 def test_bad_actions_name_key_and_value(tmp_path: Path, old: str, new: str,
                                         message: str) -> None:
