@@ -86,16 +86,13 @@ def verdict_code(status: str) -> ExitCode:
 
 def refuse_incomplete_calibration(result: Ingested) -> None:
     """Refuse to write a calibration from a sphere test that is not whole: a run cut
-    short, a touch missing or removed as implausible, or a log read with its identity
-    ignored.
+    short, or a log read with its identity ignored (a sphere test with a touch missing
+    or removed as implausible is NOT EVALUATED and never reaches here).
 
     Raises:
         ProbegenError: naming why.
     """
-    test = result.results[0].feature
     why = ("the log's run did not finish (no PGEND)" if not result.log.complete else
-           f"the sphere test {test} lacks touches (see the notes)"
-           if test in result.incomplete else
            "the log's identity was not checked (--ignore-identity)"
            if any(n.startswith("WARNING: identity") for n in result.notes) else "")
     if why:

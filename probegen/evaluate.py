@@ -110,6 +110,14 @@ def run_status(verdicts: Iterable[bool | None], *, not_evaluated: bool,
     return OK if checks else UNTOLERANCED
 
 
+def accepted(characteristics: Iterable[Characteristic], rule: str = "simple"
+             ) -> bool | None:
+    """A feature's verdict under the decision ``rule`` (``simple``: every toleranced
+    characteristic within its limits): None when nothing is toleranced."""
+    found = [v for v in (c.accepted(rule) for c in characteristics) if v is not None]
+    return all(found) if found else None
+
+
 class Evaluated(Protocol):
     """What every evaluated feature result has (sphere test, revolved, free-form,
     planar)."""
@@ -198,8 +206,7 @@ class SphereTestResult:
     @property
     def ok(self) -> bool | None:
         """All toleranced characteristics within limits (None if none is toleranced)."""
-        checks = [c.ok for c in self.characteristics if c.ok is not None]
-        return all(checks) if checks else None
+        return accepted(self.characteristics)
 
     def calibration(self, source: str = "", date: str = "") -> ProbeCalibration:
         """The probe calibration this test measured (its ``ball_radius`` the nominal;

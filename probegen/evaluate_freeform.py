@@ -23,7 +23,7 @@ import numpy as np
 from probegen import compensate_freeform as cf
 from probegen.compensate import ProbeCalibration
 from probegen.errors import ProbegenError
-from probegen.evaluate import Characteristic
+from probegen.evaluate import Characteristic, accepted
 from probegen.spec import FREEFORM_EXTRA as EXTRA
 from probegen.spec import FREEFORM_STRIDE as STRIDE
 from probegen.uncertainty import Budget, combine
@@ -72,8 +72,7 @@ class FreeformResult:
     @property
     def ok(self) -> bool | None:
         """All toleranced characteristics within limits (None if none is toleranced)."""
-        checks = [c.ok for c in self.characteristics if c.ok is not None]
-        return all(checks) if checks else None
+        return accepted(self.characteristics)
 
     @property
     def summary(self) -> cf.DeviationSummary:

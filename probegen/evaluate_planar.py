@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from probegen.compensate import ProbeCalibration, compensate
-from probegen.evaluate import Characteristic
+from probegen.evaluate import Characteristic, accepted
 from probegen.geometry import minimum_zone
 from probegen.geometry.fits import fit_line_2d, fit_plane
 from probegen.ingest_actions import evaluate_check
@@ -65,8 +65,7 @@ class PlanarResult:
     @property
     def ok(self) -> bool | None:
         """All toleranced characteristics within limits (None if none is toleranced)."""
-        checks = [c.ok for c in self.characteristics if c.ok is not None]
-        return all(checks) if checks else None
+        return accepted(self.characteristics)
 
 
 def evaluate_planar(check: Check, balls: dict[int, Vec3], *,

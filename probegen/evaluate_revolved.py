@@ -80,7 +80,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from probegen.compensate import ProbeCalibration, calibrated_centres
 from probegen.errors import ProbegenError
-from probegen.evaluate import Characteristic
+from probegen.evaluate import Characteristic, accepted
 from probegen.evaluate_uncertainty import FittedShape, uncertainties
 from probegen.geometry import minimum_zone
 from probegen.geometry.fits import (
@@ -192,8 +192,7 @@ class RevolvedResult:
     @property
     def ok(self) -> bool | None:
         """All toleranced characteristics within limits (None if none is toleranced)."""
-        checks = [c.ok for c in self.characteristics if c.ok is not None]
-        return all(checks) if checks else None
+        return accepted(self.characteristics)
 
 
 @dataclass(frozen=True, slots=True)

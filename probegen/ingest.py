@@ -33,10 +33,10 @@ from probegen.compensate import ProbeCalibration, calibration_state, compensate,
 from probegen.errors import ProbegenError
 from probegen.evaluate import (
     NOT_EVALUATED,
-    Characteristic,
     Evaluated,
     NotEvaluated,
     SphereTestResult,
+    accepted,
     evaluate_sphere_test,
     run_status,
     status_of,
@@ -58,8 +58,8 @@ from probegen.evaluate_revolved import (
 from probegen.geometry.fits_solver import vec3
 from probegen.ingest_actions import Decision, decisions
 from probegen.logcheck import check_log, ranges
-from probegen.results import DmisOutput, DprntLog, read_dmis_output, read_dprnt
-from probegen.results.dprnt import log_lines
+from probegen.results import DmisOutput, DprntLog, read_dmis_output
+from probegen.results.dprnt import log_lines, parse_dprnt, read_raw
 from probegen.spec import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec, SphereTest
 from probegen.spec_actions import PlanarSpec
 from probegen.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
@@ -183,13 +183,6 @@ def budget_of(spec: Spec, calibration: ProbeCalibration | None) -> Budget:
                   stated.probe)
 
 
-def accepted(characteristics: Sequence[Characteristic], rule: str) -> bool | None:
-    """A feature's verdict under ``rule``: None when nothing is toleranced."""
-    checks = [c.accepted(rule) for c in characteristics]
-    found = [c for c in checks if c is not None]
-    return all(found) if found else None
-
-
 Outcome = Evaluated | NotEvaluated
 
 
@@ -201,9 +194,7 @@ class _Gaps:
 
     def __init__(self, log: DprntLog, touches: Touches) -> None:
         self.touches = touches
-        lines = {(t.feature, t.index): t.line for t in log.latest_touches() if t.kind == "PT"}
-        self.notouch = {(e.feature, e.index): e.line for e in log.errors
-                        if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
+        self.notouch = log.no_contact()
 
     def reason(self, feature: str, indices: Sequence[int], *, missing_too: bool = True
                ) -> str:
@@ -245,12 +236,12 @@ def ingest(log_path: str | Path, spec: Spec, *,
     calibration = for_stylus(calibration or spec.machine.calibration,
                              spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
     planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
-    raw = read_dprnt(log_path)
-    checked = check_log(raw, program=spec.program_number,
+    data = read_raw(log_path)  # once: parsed here, quoted in diagnostics by check_log
+    checked = check_log(parse_dprnt(data, source=str(log_path)), program=spec.program_number,
                         identity=planned.program.setup.identity,
                         touches=planned_touches(planned.program, planned.sphere_tests),
                         run=run, ignore_identity=ignore_identity,
-                        lines=log_lines(Path(log_path).read_bytes()))
+                        lines=log_lines(data))
     log = checked.log
     notes = list(checked.notes) + calibration_notes(log, calibration)
     notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"

@@ -5,7 +5,6 @@ as the zone diameter."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,20 +25,9 @@ from probegen.geometry.fits import (
     fit_plane,
     fit_sphere,
 )
-from probegen.spec import load_spec
+from probegen.spec import RevolvedTolerance, load_spec
 
 R_BALL = 2.0
-
-
-@dataclass(frozen=True)
-class Limits:
-    diameter: tuple[float, float] | None = None
-    position: float | None = None
-    form: float | None = None
-    roundness: float | None = None
-    taper: float | None = None
-    angle: tuple[float, float] | None = None
-    form_method: str = "minimum_zone"
 
 
 def lobed(n_even: int = 6, extra: int = 40, amplitude: float = 0.01,
@@ -115,7 +103,7 @@ def test_a_bore_with_material_added_reads_a_positive_residual() -> None:
     deltas = np.zeros(16)
     deltas[3] = -0.005  # the surface 5 um nearer the axis: material where air should be
     res = evaluate_revolved("B", BORE, bore_centres(deltas), np.repeat([0, 1], 8),
-                            ball_radius=R_BALL, limits=Limits())
+                            ball_radius=R_BALL, limits=RevolvedTolerance())
     assert int(np.argmax(res.residuals)) == 3
     # the least-squares cylinder absorbs about a third of a lone 5 um bump
     assert res.residuals[3] > 0.003
@@ -127,7 +115,7 @@ def test_a_bore_with_material_added_reads_a_positive_residual() -> None:
                             np.repeat([20.0, 5.0], 8)])
     outer = Nominal("cylinder", (0.0, 0.0, 12.5), (0.0, 0.0, 1.0), 30.0, False, BORE.sections)
     res = evaluate_revolved("P", outer, boss, np.repeat([0, 1], 8), ball_radius=R_BALL,
-                            limits=Limits())
+                            limits=RevolvedTolerance())
     assert {int(np.argmax(res.residuals)) % 8} == {5}
     assert max(res.residuals) > 0.002
 
@@ -136,9 +124,9 @@ def test_form_characteristics_name_their_method_and_minimum_zone_is_narrower() -
     lobes = 0.002 * np.cos(3 * (0.1 + 2.0 * math.pi * np.arange(8) / 8))
     centres = bore_centres(np.tile(lobes, 2))
     k = np.repeat([0, 1], 8)
-    zone = evaluate_revolved("B", BORE, centres, k, ball_radius=R_BALL, limits=Limits())
+    zone = evaluate_revolved("B", BORE, centres, k, ball_radius=R_BALL, limits=RevolvedTolerance())
     ls = evaluate_revolved("B", BORE, centres, k, ball_radius=R_BALL,
-                           limits=Limits(form_method="least_squares"))
+                           limits=RevolvedTolerance(form_method="least_squares"))
     for name in ("FORM", "RON_S1", "RON_S2"):
         mz_c = next(c for c in zone.characteristics if c.name == name)
         ls_c = next(c for c in ls.characteristics if c.name == name)
@@ -205,7 +193,7 @@ def test_a_displaced_cone_gives_the_same_gauge_diameters() -> None:
 
     def gauges(points: np.ndarray) -> list[float]:
         res = evaluate_revolved("C", nominal, points, k, ball_radius=CONE_BALL,
-                                limits=Limits())
+                                limits=RevolvedTolerance())
         return [c.measured for c in res.characteristics if c.name.startswith("D_S")]
 
     home = gauges(c)

@@ -155,10 +155,10 @@ def _local(points: ArrayLike, point: ArrayLike, axis: ArrayLike) -> tuple[FloatA
     return local, _spread(local)
 
 
-def cylindricity(points: ArrayLike, point: ArrayLike, axis: ArrayLike) -> float:
-    """Minimum-zone cylindricity of ``points : (n, 3)`` from the least-squares axis
-    (``point``, unit ``axis``): the radial width of the narrowest coaxial shell."""
-    q, spread = _local(points, point, axis)
+def _line_distances(q: FloatArray, spread: float) -> Residuals:
+    """The distances of local points ``q`` from a line near the local z axis, as a
+    function of its 4 pose parameters (a shift in x, y; a tilt in x, y over ``spread``):
+    the model of cylindricity and of the straightness of a line in space."""
 
     def distances(p: FloatArray) -> FloatArray:
         d = np.array([p[2] / spread, p[3] / spread, 1.0])
@@ -166,6 +166,15 @@ def cylindricity(points: ArrayLike, point: ArrayLike, axis: ArrayLike) -> float:
         rel = q - np.array([p[0], p[1], 0.0])
         return np.asarray(np.linalg.norm(np.cross(rel, d), axis=1))
 
+    return distances
+
+
+def cylindricity(points: ArrayLike, point: ArrayLike, axis: ArrayLike) -> float:
+    """Minimum-zone cylindricity of ``points : (n, 3)`` from the least-squares axis
+    (``point``, unit ``axis``): the radial width of the narrowest coaxial shell."""
+    q, spread = _local(points, point, axis)
+
+    distances = _line_distances(q, spread)
     return chebyshev(distances, np.zeros(4), spread)[0]
 
 
@@ -201,10 +210,5 @@ def straightness_3d(points: ArrayLike, point: ArrayLike, direction: ArrayLike) -
     least-squares line: the diameter of the thinnest cylinder holding the points."""
     q, spread = _local(points, point, direction)
 
-    def distances(p: FloatArray) -> FloatArray:
-        d = np.array([p[2] / spread, p[3] / spread, 1.0])
-        d /= np.linalg.norm(d)
-        rel = q - np.array([p[0], p[1], 0.0])
-        return np.asarray(np.linalg.norm(np.cross(rel, d), axis=1))
-
+    distances = _line_distances(q, spread)
     return chebyshev(distances, np.zeros(4), spread, one_sided=True)[0]

@@ -136,10 +136,8 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap,
 def _cut(log: DprntLog) -> dict[tuple[str, int], str]:
     """Why touches may be missing: ``ERR NOTOUCH`` points not measured again, and
     (key ``("", 0)``) a log without ``PGEND``."""
-    lines = {(t.feature, t.index): t.line for t in log.latest_touches() if t.kind == "PT"}
-    out = {(e.feature, e.index): f"no contact (ERR NOTOUCH, line {e.line})"
-           for e in log.errors
-           if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
+    out = {key: f"no contact (ERR NOTOUCH, line {line})"
+           for key, line in log.no_contact().items()}
     if not log.complete:
         out[("", 0)] = "the log has no PGEND line: the program did not finish"
     return out

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 from typing import Any, NoReturn
 
 from probegen.errors import ProbegenError
-from probegen.evaluate import NOT_EVALUATED, NOT_OK, OK, STATUSES, UNTOLERANCED, status_of
+from probegen.evaluate import (
+    NOT_EVALUATED,
+    NOT_OK,
+    OK,
+    STATUSES,
+    run_status,
+    status_of,
+)
 
 Vec3 = tuple[float, float, float]
 
@@ -227,13 +234,11 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
 
 
 def _run_status(features: Sequence[Feature], complete: bool | None) -> str:
-    """The run's status for results without one (``probegen.evaluate.run_status``)."""
-    statuses = {f.status for f in features}
-    if NOT_OK in statuses:
-        return NOT_OK
-    if NOT_EVALUATED in statuses or complete is False:
-        return NOT_EVALUATED
-    return OK if OK in statuses else UNTOLERANCED
+    """The run's status for results without one: ``probegen.evaluate.run_status`` of
+    the features' statuses."""
+    statuses = [f.status for f in features]
+    return run_status(({OK: True, NOT_OK: False}.get(s) for s in statuses),
+                      not_evaluated=NOT_EVALUATED in statuses, complete=complete is not False)
 
 
 def _feature(r: _Reader, value: object, key: str) -> Feature:

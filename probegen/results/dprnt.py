@@ -140,12 +140,20 @@ def read_dprnt(path: str | os.PathLike[str], *, strict: bool = False) -> DprntLo
         ProbegenError: the file cannot be read.
         ResultsParseError: ``strict`` is set and the log has diagnostics.
     """
+    return parse_dprnt(read_raw(path), source=os.fspath(path), strict=strict)
+
+
+def read_raw(path: str | os.PathLike[str]) -> bytes:
+    """The raw bytes of a log file, for :func:`parse_dprnt` and :func:`log_lines`.
+
+    Raises:
+        ProbegenError: the file cannot be read.
+    """
     try:
         with open(path, "rb") as f:
-            data = f.read()
+            return f.read()
     except OSError as exc:
         raise ProbegenError(f"cannot read DPRNT log '{os.fspath(path)}': {exc.strerror}") from exc
-    return parse_dprnt(data, source=os.fspath(path), strict=strict)
 
 
 def touches_array(touches: DprntLog | tuple[Touch, ...]) -> NDArray[np.float64]:

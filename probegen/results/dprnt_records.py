@@ -200,6 +200,13 @@ class DprntLog:
         latest = {(t.kind, t.feature, t.index): t for t in self.touches}
         return tuple(sorted(latest.values(), key=lambda t: t.line))
 
+    def no_contact(self) -> dict[tuple[str, int], int]:
+        """The points whose touch reported no contact, by (feature, index), with the line
+        of their ``ERR NOTOUCH``: those not measured again (``PT``) after it."""
+        lines = {(t.feature, t.index): t.line for t in self.latest_touches() if t.kind == "PT"}
+        return {(e.feature, e.index): e.line for e in self.errors
+                if e.code == "NOTOUCH" and e.line > lines.get((e.feature, e.index), 0)}
+
 
 @dataclass(frozen=True, slots=True)
 class _Header:
