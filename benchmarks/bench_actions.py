@@ -31,12 +31,12 @@ sys.path.insert(0, str(REPO))
 
 from probegen import cad  # noqa: E402
 from probegen.dialects import get_dialect  # noqa: E402
-from probegen.ingest import ingest  # noqa: E402
+from probegen.evaluate.ingest import ingest  # noqa: E402
 from probegen.machine.probe_model import Lobing, ProbeModel  # noqa: E402
 from probegen.planning import plan_program  # noqa: E402
 from probegen.sim.contact import PlacedPart  # noqa: E402
 from probegen.sim.vm import VirtualMachine, run_text  # noqa: E402
-from probegen.spec import load_spec  # noqa: E402
+from probegen.spec.model import load_spec  # noqa: E402
 
 SPEC = REPO / "samples/bore_block/bore_block_actions.toml"
 WORK = np.array([300.0, 200.0, -100.0])

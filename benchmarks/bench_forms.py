@@ -24,13 +24,13 @@ sys.path.insert(0, str(ROOT))
 
 from probegen import cad  # noqa: E402
 from probegen.dialects import get_dialect  # noqa: E402
-from probegen.ingest import ingest, to_table  # noqa: E402
+from probegen.evaluate.ingest import ingest, to_table  # noqa: E402
 from probegen.machine.probe_model import ProbeModel  # noqa: E402
 from probegen.planning import plan_program  # noqa: E402
 from probegen.sim.contact import PlacedPart  # noqa: E402
 from probegen.sim.form import FormError, Lobe  # noqa: E402
 from probegen.sim.vm import VirtualMachine, run_text  # noqa: E402
-from probegen.spec import load_spec  # noqa: E402
+from probegen.spec.model import load_spec  # noqa: E402
 
 RUNS = {
     "samples/bore_block/bore_block.toml": (

@@ -43,13 +43,13 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from probegen import compensate_freeform as cf  # noqa: E402
+from probegen.evaluate import compensate_freeform as cf  # noqa: E402
 from probegen.geometry.bspline import (  # noqa: E402
     BSplineSurface,
     clamped_knots,
     greville,
     height_field,
-)  # noqa: E402
+)
 from probegen.geometry.offset_surface import BallCentres, ball_centres  # noqa: E402
 
 SLOPES = (0, 10, 20, 30, 40, 50, 60)

@@ -29,13 +29,13 @@ METHODS = ("vertical", "vertical2d", "microplane", "vector")
 def main() -> None:
     from probegen import cad
     from probegen.dialects import get_dialect
-    from probegen.ingest import ingest, ingest_dmis_freeform
+    from probegen.evaluate.ingest import ingest, ingest_dmis_freeform
     from probegen.machine.probe_model import ProbeModel
     from probegen.planning import plan_program
     from probegen.results import parse_dmis_output
     from probegen.sim.contact import PlacedPart
     from probegen.sim.vm import VirtualMachine, run_text
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     spec = load_spec(REPO / "samples/freeform/freeform.toml")
     model = cad.load_step(REPO / "samples/freeform/freeform.step")

@@ -47,7 +47,7 @@ def main(counts: tuple[int, int], exact_all: bool) -> None:
     from probegen.planning.collision import MeshObstacle, load_model, obstacle_for
     from probegen.planning.freeform import plan_touches
     from probegen.planning.freeform_spec import plan_freeform
-    from probegen.spec import FreeformSpec, load_spec
+    from probegen.spec.model import FreeformSpec, load_spec
 
     spec = load_spec(SPEC)
     base = spec.features[0]

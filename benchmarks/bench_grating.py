@@ -24,8 +24,8 @@ from probegen.calibrate.grating_io import GratingReading
 from probegen.calibrate.identify import Identification, axis_ranges, identify_global, truth
 from probegen.calibrate.identify_model import setup_of
 from probegen.calibrate.identify_stepwise import identify_stepwise
+from probegen.cli.grating import simulate_readings
 from probegen.geometry.orthopoly import rms, rms_difference
-from probegen.grating import simulate_readings
 from probegen.machine.kinematics import Machine, load_machine
 from probegen.planning.grating import load_grating_spec
 

@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from probegen import cad
-from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
 from probegen.machine.kinematics import load_machine
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.machine.profile import load_profile
 from probegen.post.evaluate import evaluate_log
 from probegen.post.files import PostOutput, post_file
 from probegen.results import parse_dprnt
+from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import CmmAdapter, VirtualMachine, run_text
 

@@ -173,9 +173,9 @@ def table(rows: list[Row]) -> str:
 
 
 def main(argv: list[str]) -> int:
-    import probegen.progress
+    import probegen.cli.progress
 
-    probegen.progress.ENABLED = False
+    probegen.cli.progress.ENABLED = False
     models = [Path(a) for a in argv] or [*sorted(NIST.glob("*.stp")), DCX]
     rows = []
     for m in models:

@@ -62,7 +62,7 @@ class Instant:
 def main() -> int:
     from probegen.machine.probe_model import Lobing, ProbeModel
     from probegen.sim.contact import PlacedPart
-    from probegen.sim.macrob import run_program
+    from probegen.sim.macrob.machine import run_program
     from probegen.sim.vm import VirtualMachine, run_text
 
     text = program(N)

@@ -29,7 +29,7 @@ def main() -> int:
     from probegen import cad
     from probegen.planning import plan_program
     from probegen.planning.collision import MeshObstacle, Stylus, _sweep, load_model
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     spec = load_spec("samples/sphere25/sphere_test.toml")
     t0 = time.perf_counter()

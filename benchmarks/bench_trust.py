@@ -44,21 +44,21 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from probegen import cad  # noqa: E402
-from probegen.compensate import ProbeCalibration  # noqa: E402
 from probegen.dialects import get_dialect  # noqa: E402
-from probegen.dmisrun.interpreter import run_dmis  # noqa: E402
 from probegen.errors import ProbegenError  # noqa: E402
-from probegen.evaluate import evaluate_sphere_test  # noqa: E402
-from probegen.evaluate_revolved import Nominal, evaluate_revolved  # noqa: E402
+from probegen.evaluate.characteristics import evaluate_sphere_test  # noqa: E402
+from probegen.evaluate.ingest import Ingested, ingest  # noqa: E402
+from probegen.evaluate.revolved import Nominal, evaluate_revolved  # noqa: E402
 from probegen.geometry.fits_axial import fit_cylinder  # noqa: E402
-from probegen.ingest import Ingested, ingest  # noqa: E402
+from probegen.geometry.uncertainty import Budget  # noqa: E402
+from probegen.machine.calibration import ProbeCalibration  # noqa: E402
 from probegen.machine.probe_model import Lobing, ProbeModel  # noqa: E402
 from probegen.planning import plan_program  # noqa: E402
 from probegen.results import read_dprnt  # noqa: E402
+from probegen.sim.cmm.interpreter import run_dmis  # noqa: E402
 from probegen.sim.contact import PlacedPart  # noqa: E402
 from probegen.sim.vm import CmmAdapter, VirtualMachine, run_text  # noqa: E402
-from probegen.spec import RevolvedTolerance, Spec, load_spec  # noqa: E402
-from probegen.uncertainty import Budget  # noqa: E402
+from probegen.spec.model import RevolvedTolerance, Spec, load_spec  # noqa: E402
 
 UM = 1e-3
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 from dataclasses import dataclass
+from enum import IntEnum
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,7 +72,7 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
 class ProbegenError(Exception):
     """Base of every error probegen raises on purpose.
 
-    ``exit_code`` is what the CLI returns for it (see ``probegen.cli.ExitCode``).
+    ``exit_code`` is what the CLI returns for it (see :class:`ExitCode` below).
     """
 
     exit_code = 1
@@ -147,3 +148,34 @@ class CalibrationError(ProbegenError):
     """Calibration data that cannot determine what was asked."""
 
     exit_code = 7
+
+
+class ExitCode(IntEnum):
+    """Process exit codes (the list with their meaning: the README).
+
+    The verdict of ``ingest`` and ``post-ingest``: ``OK`` (0) every toleranced
+    characteristic evaluated and conforming (or nothing toleranced); ``NOT_OK`` (8) at least
+    one out of tolerance; ``INCOMPLETE`` (11) nothing out of tolerance, but a feature or a
+    toleranced characteristic could not be evaluated (missing or no-contact touches, a
+    failed fit) or the run did not finish (no ``PGEND``).  When both happen ``NOT_OK`` wins:
+    a characteristic out of tolerance, measured completely, is a definite finding that the
+    missing measurements cannot reverse (the part is rejected either way); the output still
+    lists every NOT EVALUATED feature.  Input errors keep their own codes (1-7, 64).
+    """
+
+    OK = 0
+    ERROR = 1
+    SPEC = 2
+    MODEL = 3
+    PLANNING = 4
+    UNSUPPORTED = 5
+    PARSE = 6
+    CALIBRATION = 7
+    NOT_OK = 8
+    CAPTURE_INCOMPLETE = 9
+    SIM_ALARM = 10
+    INCOMPLETE = 11
+    USAGE = 64
+    INTERNAL = 70
+    OUTPUT = 73
+    INTERRUPTED = 130

@@ -25,13 +25,13 @@ from conftest import REPO, sample_script
 from probegen import cad
 from probegen.dialects import get_dialect
 from probegen.errors import UnsupportedError
-from probegen.ingest import ingest, to_table
+from probegen.evaluate.ingest import ingest, to_table
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import SimResult, VirtualMachine, control_state, run_text
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SPEC = Path("samples/bore_block/bore_block_actions.toml")
 CMM_SPEC = Path("samples/bore_block/bore_block_cmm.toml")

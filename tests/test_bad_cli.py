@@ -1,7 +1,7 @@
 """The bad-input table: every command, fed bad input, prints one line and exits non-zero.
 
 The cases are data (tests/bad_inputs/cli_cases.toml, input files under
-tests/bad_inputs/cli/); each is run through ``probegen.cli.main`` in the repository root
+tests/bad_inputs/cli/); each is run through ``probegen.cli.app.main`` in the repository root
 and its stderr, with the temporary folder, the repository and ../shared written as
 ``<tmp>``, ``<repo>`` and ``<shared>``, is compared with ``tests/bad_inputs/cli/<id>.err``
 (``make goldens`` rewrites them).  A case may prepare its inputs in a temporary folder:
@@ -32,8 +32,8 @@ from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from probegen.cli import main
-from probegen.cli_exit import ExitCode
+from probegen.cli.app import main
+from probegen.errors import ExitCode
 
 TABLE = REPO / "tests" / "bad_inputs" / "cli_cases.toml"
 GOLDEN = REPO / "tests" / "bad_inputs" / "cli"
@@ -153,12 +153,12 @@ def test_quiet_and_debug_anywhere(in_repo: Path, argv: list[str]) -> None:
 def test_internal_error_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
     """A bug prints one line asking for a report and exits 70; ``--debug`` adds the
     traceback."""
-    import probegen.cli
+    import probegen.cli.app
 
     def broken(_args: object) -> int:
         raise ZeroDivisionError("float division\nby zero")
 
-    monkeypatch.setattr(probegen.cli, "_sphere_points", broken)
+    monkeypatch.setattr(probegen.cli.app, "_sphere_points", broken)
     code, err = run(["sphere-points"])
     assert code == ExitCode.INTERNAL == 70
     assert err == ("probegen: internal error: ZeroDivisionError: float division by zero "
@@ -227,25 +227,25 @@ def test_random_command_lines(command: str, fragments: list[str]) -> None:
 ])
 def test_quiet_takes_effect_anywhere(in_repo: Path, monkeypatch: pytest.MonkeyPatch,
                                      argv: list[str], bars: bool) -> None:
-    import probegen.progress
+    import probegen.cli.progress
 
-    monkeypatch.setattr(probegen.progress, "ENABLED", not bars)  # restored afterwards
+    monkeypatch.setattr(probegen.cli.progress, "ENABLED", not bars)  # restored afterwards
     code, err = run(argv)
     assert code == ExitCode.OK, err
-    assert probegen.progress.ENABLED is bars
+    assert probegen.cli.progress.ENABLED is bars
 
 
 def test_a_warning_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
     """A library's warning reaches the user as one line, not as a source-code excerpt."""
     import warnings
 
-    import probegen.cli
+    import probegen.cli.app
 
     def warns(_args: object) -> int:
         warnings.warn("invalid value encountered\nin divide", RuntimeWarning, stacklevel=1)
         return 0
 
-    monkeypatch.setattr(probegen.cli, "_sphere_points", warns)
+    monkeypatch.setattr(probegen.cli.app, "_sphere_points", warns)
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         code, err = run(["sphere-points"])

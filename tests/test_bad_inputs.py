@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 from conftest import REPO, assert_golden
 
-from probegen.cli import main
+from probegen.cli.app import main
 from probegen.errors import ProbegenError
 from probegen.planning import plan_program
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 BAD_SPECS = sorted((REPO / "tests" / "bad_inputs" / "spec").glob("*.toml"))
 

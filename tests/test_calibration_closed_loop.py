@@ -27,16 +27,16 @@ import pytest
 from conftest import REGEN, REPO, assert_golden, sample_script
 
 from probegen import cad
-from probegen.cli import main
-from probegen.compensate import UNCALIBRATED, ProbeCalibration, load_calibration
+from probegen.cli.app import main
 from probegen.dialects import get_dialect
-from probegen.ingest import Ingested, ingest, to_csv, to_json, to_table
+from probegen.evaluate.ingest import Ingested, ingest, to_csv, to_json, to_table
+from probegen.machine.calibration import UNCALIBRATED, ProbeCalibration, load_calibration
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.planning import plan_program
 from probegen.results import read_dprnt
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import SimResult, VirtualMachine, run_text
-from probegen.spec import Spec, load_spec
+from probegen.spec.model import Spec, load_spec
 
 UM = 1e-3
 LOBING = Lobing(lateral=0.005, axial=0.005, lobe=0.0015, phase=0.3)
@@ -380,7 +380,7 @@ def test_post_ingest_takes_the_calibration(tmp: Path, cal: ProbeCalibration) -> 
         cal, ball_radius=ball, effective_radius=cal.effective_radius - 1.0,
         radii=tuple(r - 1.0 for r in cal.radii))
     small_file = tmp / "small.cal.toml"
-    from probegen.compensate import calibration_toml
+    from probegen.machine.calibration import calibration_toml
 
     small_file.write_text(calibration_toml(small))
     nc = tmp / "simple.nc"

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from conftest import REPO
 
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 
 
 def test_compile_writes_both_dialects(in_repo: Path, tmp_path: Path,

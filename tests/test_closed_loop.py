@@ -21,17 +21,17 @@ import pytest
 from conftest import REPO, SHARED
 
 from probegen import cad
-from probegen.compensate import compensate
 from probegen.dialects import get_dialect
+from probegen.evaluate.ingest import ingest
 from probegen.geometry.fits import fit_sphere
-from probegen.ingest import ingest
+from probegen.machine.calibration import compensate
 from probegen.machine.kinematics import Machine, load_machine
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output, parse_dprnt
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import VirtualMachine, run_text
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 TOL = 1e-4
 LOBING = Lobing(0.0012, 0.0008, 0.0005)

@@ -39,8 +39,8 @@ from scipy.optimize import linprog
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.evaluate_revolved import evaluate_revolved
-from probegen.ingest import ingest, nominal_of, to_json
+from probegen.evaluate.ingest import ingest, nominal_of, to_json
+from probegen.evaluate.revolved import evaluate_revolved
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.planning.revolved_spec import plan_revolved
@@ -48,7 +48,7 @@ from probegen.results import parse_dmis_output
 from probegen.sim.contact import ContactHit, PlacedPart
 from probegen.sim.form import FormError, Lobe
 from probegen.sim.vm import VirtualMachine, run_text
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SIZE, RANGE = 1e-4, 2e-4
 OFFSET = np.array([0.3, -0.2, 0.0])

@@ -17,13 +17,13 @@ from conftest import REPO, sample_script
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.ingest import ingest, to_json
+from probegen.evaluate.ingest import ingest, to_json
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import VirtualMachine, run_text
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 TOL = 1e-4
 SPEC = Path("samples/bore_block/bore_block.toml")

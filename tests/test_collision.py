@@ -19,7 +19,7 @@ from probegen.planning.collision import (
     load_model,
     obstacle_for,
 )
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SPEC = Path("samples/sphere25/sphere_test.toml")
 

@@ -20,7 +20,7 @@ from probegen.planning import make_setup
 from probegen.planning.collision import MeshObstacle, check_program, obstacle_for
 from probegen.planning.freeform_spec import plan_freeform
 from probegen.planning.heightmap import clear_paths, height_map
-from probegen.spec import FreeformSpec, Spec, load_spec
+from probegen.spec.model import FreeformSpec, Spec, load_spec
 
 SAMPLE = REPO / "samples/freeform/freeform.step"
 NIST_CTC5 = REPO.parent / "shared/ref/nist-step/nist_ctc_05_asme1_rd.stp"

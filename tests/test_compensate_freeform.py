@@ -15,11 +15,11 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from probegen import compensate_freeform as cf
-from probegen.compensate import ProbeCalibration
 from probegen.errors import ProbegenError
+from probegen.evaluate import compensate_freeform as cf
 from probegen.geometry.bspline import BSplineSurface, height_field
 from probegen.geometry.offset_surface import ball_centres
+from probegen.machine.calibration import ProbeCalibration
 from tests.conftest import REPO
 
 R = 3.0

@@ -10,7 +10,7 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from probegen.dmis import (
+from probegen.dmis.reader import (
     LABEL_KINDS,
     Call,
     DmisFile,

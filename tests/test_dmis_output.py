@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from mutations import mutate
 from test_dprnt import CLEAN, HEAD, MALFORMED, NOISE_MOVING_LINES, NOISE_SAME_LINES, STRUCTURE
 
-from probegen.dmis import logical_statements, parse_dmis, parse_dmis_recovering
+from probegen.dmis.reader import logical_statements, parse_dmis, parse_dmis_recovering
 from probegen.errors import Diagnostic, ProbegenError, ResultsParseError
 from probegen.results import (
     DmisOutput,
@@ -337,7 +337,7 @@ def test_read_dmis_output_files(tmp_path: Path) -> None:
         read_dmis_output(tmp_path / "nope.dmo")
 
 
-# --- statement-level recovery in probegen.dmis ----------------------------------------------
+# --- statement-level recovery in probegen.dmis.reader -----------------------------------------
 
 
 @needs_nist

@@ -18,10 +18,10 @@ from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from probegen.dmis import parse_dmis
-from probegen.dmisrun.interpreter import DmisProgramError, run_dmis
+from probegen.dmis.reader import parse_dmis
 from probegen.errors import ProbegenError
 from probegen.results import parse_dmis_output
+from probegen.sim.cmm.interpreter import DmisProgramError, run_dmis
 from tests.test_dmis_vm import FakeCmm, feature_values, rotation
 
 MAJOR, MINOR = 20.0, 8.0

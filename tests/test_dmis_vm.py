@@ -17,16 +17,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from probegen.alarms import SimAlarm
-from probegen.dmis import parse_dmis, read_dmis
-from probegen.dmisrun.frames import Frame, alignment_angle
-from probegen.dmisrun.interpreter import (
-    ALARM_NO_CONTACT,
-    DmisProgramError,
-    DmisRunResult,
-    run_dmis,
-)
+from probegen.dmis.reader import parse_dmis, read_dmis
 from probegen.errors import UnsupportedError
+from probegen.sim.alarms import SimAlarm
+from probegen.sim.cmm.frames import Frame, alignment_angle
+from probegen.sim.cmm.interpreter import ALARM_NO_CONTACT, DmisProgramError, DmisRunResult, run_dmis
 from tests.conftest import REPO, SHARED, assert_golden
 
 NIST = SHARED / "ref" / "nist-ippdme"

@@ -17,14 +17,7 @@ from hypothesis import strategies as st
 from mutations import mutate
 
 from probegen.errors import Diagnostic, ProbegenError, ResultsParseError
-from probegen.results import (
-    Centre,
-    DprntLog,
-    ProgramError,
-    Touch,
-    parse_dprnt,
-    read_dprnt,
-)
+from probegen.results import Centre, DprntLog, ProgramError, Touch, parse_dprnt, read_dprnt
 from probegen.results.dprnt import Run
 
 CLEAN = (

@@ -20,9 +20,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import ProbegenError, SpecError
-from probegen.evaluate_revolved import Nominal, evaluate_revolved
+from probegen.evaluate.revolved import Nominal, evaluate_revolved
 from probegen.geometry.frames import rotation_to_z
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 R_BALL = 3.0
 EXACT = 1e-6

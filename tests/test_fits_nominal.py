@@ -11,14 +11,14 @@ import pytest
 from conftest import SHARED
 
 from probegen import cad
-from probegen.dmisrun.interpreter import run_dmis
 from probegen.errors import ProbegenError
-from probegen.evaluate_revolved import Nominal, evaluate_revolved
+from probegen.evaluate.revolved import Nominal, evaluate_revolved
 from probegen.geometry.fits_nominal import FAR_TILT, NominalShape, fit_near
 from probegen.machine.probe_model import Lobing, ProbeModel
+from probegen.sim.cmm.interpreter import run_dmis
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import CmmAdapter, VirtualMachine
-from probegen.spec import RevolvedTolerance
+from probegen.spec.model import RevolvedTolerance
 
 DCX = SHARED / "ref" / "nist-ippdme" / "DCXpart"
 PROGRAM = DCX / "DMIS" / "IMTS_M_clean.dmi"

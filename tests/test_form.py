@@ -153,7 +153,7 @@ def test_mutated_form_files(tmp_path: Path, data: st.DataObject) -> None:
 
 
 def test_cli_sim_with_forms(in_repo: Path, tmp_path: Path) -> None:
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     forms = tmp_path / "forms.toml"
     forms.write_text("[[form]]\nface = 8\noffset = 0.01\n")
@@ -162,8 +162,8 @@ def test_cli_sim_with_forms(in_repo: Path, tmp_path: Path) -> None:
     out = tmp_path / "run.log"
     assert main(["sim", str(program), "--spec", "samples/bore_block/bore_block.toml",
                  "--form", str(forms), "-o", str(out)]) == 0
-    from probegen.ingest import ingest
-    from probegen.spec import load_spec
+    from probegen.evaluate.ingest import ingest
+    from probegen.spec.model import load_spec
 
     bore = ingest(out, load_spec("samples/bore_block/bore_block.toml")).revolved[0]
     assert bore.diameter == pytest.approx(50.02, abs=1e-4)
@@ -171,7 +171,7 @@ def test_cli_sim_with_forms(in_repo: Path, tmp_path: Path) -> None:
 
 def test_cli_form_needs_a_model(in_repo: Path, tmp_path: Path,
                                 capsys: pytest.CaptureFixture[str]) -> None:
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     forms = tmp_path / "forms.toml"
     forms.write_text("[[form]]\nface = 1\noffset = 0.01\n")

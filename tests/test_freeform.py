@@ -10,18 +10,12 @@ import pytest
 from conftest import REPO, sample_script
 
 from probegen import cad, ir
-from probegen.cad.freeform import (
-    FaceMesh,
-    FaceSurface,
-    boundary_samples,
-    guide_points,
-    is_freeform,
-)
-from probegen.cli import main
+from probegen.cad.freeform import FaceMesh, FaceSurface, boundary_samples, guide_points, is_freeform
+from probegen.cli.app import main
 from probegen.dialects import get_dialect
 from probegen.planning import make_setup, plan_program
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
-from probegen.spec import FreeformSpec, Spec, load_spec
+from probegen.spec.model import FreeformSpec, Spec, load_spec
 
 STEP = REPO / "samples/freeform/freeform.step"
 SPEC = Path("samples/freeform/freeform.toml")

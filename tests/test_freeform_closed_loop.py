@@ -24,14 +24,14 @@ from conftest import REPO
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.evaluate_freeform import FreeformResult
-from probegen.ingest import ingest, ingest_dmis_freeform, to_json
+from probegen.evaluate.freeform import FreeformResult
+from probegen.evaluate.ingest import ingest, ingest_dmis_freeform, to_json
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import VirtualMachine, run_text
-from probegen.spec import Spec, load_spec
+from probegen.spec.model import Spec, load_spec
 
 SPEC = Path("samples/freeform/freeform.toml")
 OFFSET = np.array([0.02, -0.03, 0.05])
@@ -240,7 +240,7 @@ def test_missing_touches_leave_their_guide_point_out(in_repo: Path, tmp_path: Pa
 
 def test_cli_ingests_dmis_output(in_repo: Path, tmp_path: Path, model: cad.Model,
                                  capsys: pytest.CaptureFixture[str]) -> None:
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     spec = load_spec(SPEC)
     planned = plan_program(spec, runtime_variables=False)

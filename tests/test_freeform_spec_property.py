@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import ProbegenError
-from probegen.spec import FreeformSpec, load_spec
+from probegen.spec.model import FreeformSpec, load_spec
 
 SAMPLE = (REPO / "samples/freeform/freeform_2d.toml").read_text()
 BASE = SAMPLE.replace('"../machines/vmc-fanuc.toml"',

@@ -8,10 +8,10 @@ import pytest
 from conftest import REPO, assert_golden
 
 from probegen.dialects import get_dialect
-from probegen.dmis import parse_dmis
+from probegen.dmis.reader import parse_dmis
 from probegen.errors import UnsupportedError
 from probegen.planning import plan_program
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SPECS = sorted(p for p in (REPO / "samples").glob("*/*.toml")
                if "[[feature]]" in p.read_text(encoding="utf-8"))

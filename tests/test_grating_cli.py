@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from conftest import REPO
 
-from probegen.cli import main
+from probegen.cli.app import main
 
 SPEC = str(REPO / "samples" / "grating" / "grating.toml")
 ERRORS = str(REPO / "samples" / "grating" / "machine-errors.toml")

@@ -158,7 +158,7 @@ def mutated_spec(draw: st.DrawFn) -> str:
 @given(mutated_spec())
 def test_mutated_grating_spec_ends_in_a_spec_or_a_probegen_error(tmp_path: Path,
                                                                 text: str) -> None:
-    from probegen.grating import grating_programs
+    from probegen.cli.grating import grating_programs
     from probegen.planning.grating import load_grating_spec
 
     try:

@@ -10,8 +10,8 @@ import pytest
 from conftest import REPO, assert_golden
 
 from probegen import ir
+from probegen.cli.grating import grating_programs, readings_of, simulate_readings
 from probegen.errors import CollisionError, SpecError, UnsupportedError
-from probegen.grating import grating_programs, readings_of, simulate_readings
 from probegen.machine.kinematics import Machine
 from probegen.planning.grating import (
     GratingSetup,

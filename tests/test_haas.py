@@ -15,9 +15,9 @@ from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dprnt
 from probegen.sim.contact import PlacedPart
-from probegen.sim.macrob import Settings, run_program
+from probegen.sim.macrob.machine import Settings, run_program
 from probegen.sim.vm import HOME, VirtualMachine
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SPECS = sorted(p for p in (REPO / "samples").glob("*/*.toml")
                if "[[feature]]" in p.read_text(encoding="utf-8"))

@@ -32,16 +32,10 @@ from probegen.calibrate.identify import (
     raw_parameters,
     truth,
 )
-from probegen.calibrate.identify_model import (
-    FUNCTIONS,
-    VolumetricModel,
-    analyse,
-    design,
-    setup_of,
-)
+from probegen.calibrate.identify_model import FUNCTIONS, VolumetricModel, analyse, design, setup_of
 from probegen.calibrate.identify_stepwise import identify_stepwise
+from probegen.cli.grating import readings_of, simulate_readings
 from probegen.geometry.orthopoly import evaluate, rms, rms_difference
-from probegen.grating import readings_of, simulate_readings
 from probegen.machine.kinematics import Machine, load_machine
 from probegen.planning.grating import GratingSpec, plan_setup, setups
 
@@ -325,7 +319,7 @@ def test_confidence_bands_cover_the_planted_functions(machine: Machine, tmp_path
     function, from the covariance of its Legendre coefficients) hold the planted
     function at about 95 % of the positions over three noisy runs; the CSV tables and
     the plots carry them."""
-    from probegen.grating import write_outputs
+    from probegen.cli.grating import write_outputs
 
     hits = total = 0
     for seed in range(3):

@@ -18,11 +18,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import mutate
 
-from probegen.cli import ExitCode, main
-from probegen.compensate import ProbeCalibration, calibration_toml, compensate, load_calibration
+from probegen.cli.app import ExitCode, main
 from probegen.errors import ProbegenError
-from probegen.ingest import ingest, to_csv, to_json
-from probegen.spec import load_spec
+from probegen.evaluate.ingest import ingest, to_csv, to_json
+from probegen.machine.calibration import (
+    ProbeCalibration,
+    calibration_toml,
+    compensate,
+    load_calibration,
+)
+from probegen.spec.model import load_spec
 
 LOG = Path("samples/sphere25/sphere_test.log")
 SPEC = Path("samples/sphere25/sphere_test.toml")

@@ -36,7 +36,7 @@ from probegen.dialects import get_dialect
 from probegen.errors import UnsupportedError
 from probegen.planning import plan_program
 from probegen.results import parse_dprnt
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 TOL = 1e-4
 SPECS = sorted(p for p in (REPO / "samples").glob("*/*.toml")

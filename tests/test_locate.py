@@ -18,7 +18,7 @@ from conftest import REPO
 
 from probegen import ir
 from probegen.planning import plan_program
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 R, BALL = 12.5, 3.0
 

@@ -16,16 +16,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
 
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 from probegen.dialects import get_dialect
 from probegen.errors import ProbegenError
-from probegen.identity import PlannedTouch
-from probegen.ingest import ingest
-from probegen.logcheck import PLAUSIBLE_MARGIN, check_log
+from probegen.evaluate.ingest import ingest
+from probegen.ir.identity import PlannedTouch
 from probegen.planning import plan_program
 from probegen.planning.identity import planned_touches
 from probegen.results import parse_dprnt
-from probegen.spec import Spec, load_spec
+from probegen.results.logcheck import PLAUSIBLE_MARGIN, check_log
+from probegen.spec.model import Spec, load_spec
 
 SPEC = REPO / "samples/sphere25/sphere_test.toml"
 LOG_TEXT = (REPO / "samples/sphere25/sphere_test.log").read_text()

@@ -13,13 +13,20 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from probegen.alarms import SimAlarm
 from probegen.errors import ProbegenError, ProgramParseError
 from probegen.results import parse_dprnt
-from probegen.sim import macrob_ast as ast
-from probegen.sim.macrob import FreeMachine, Machine, Point, RunResult, Settings, run_program
-from probegen.sim.macrob_dprnt import format_value
-from probegen.sim.macrob_parse import parse_program, read_program
+from probegen.sim.alarms import SimAlarm
+from probegen.sim.macrob import ast
+from probegen.sim.macrob.dprnt import format_value
+from probegen.sim.macrob.machine import (
+    FreeMachine,
+    Machine,
+    Point,
+    RunResult,
+    Settings,
+    run_program,
+)
+from probegen.sim.macrob.parse import parse_program, read_program
 
 TESTS = Path(__file__).resolve().parent
 DATA = TESTS / "data" / "macrob"

@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import SpecError
-from probegen.evaluate import evaluate_sphere_test
-from probegen.evaluate_revolved import Nominal, evaluate_revolved
+from probegen.evaluate.characteristics import evaluate_sphere_test
+from probegen.evaluate.revolved import Nominal, evaluate_revolved
 from probegen.geometry import minimum_zone as mz
 from probegen.geometry.fits import (
     fit_circle_2d,
@@ -25,7 +25,7 @@ from probegen.geometry.fits import (
     fit_plane,
     fit_sphere,
 )
-from probegen.spec import RevolvedTolerance, load_spec
+from probegen.spec.model import RevolvedTolerance, load_spec
 
 R_BALL = 2.0
 

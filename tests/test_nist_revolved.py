@@ -69,7 +69,7 @@ def test_model_without_a_plannable_feature_completes_and_names_the_reasons(
         capsys: pytest.CaptureFixture[str]) -> None:
     """FTC 9: every axis is horizontal, out of reach of a vertical probe: the spec has
     no feature, the program is empty, and `plan --all-revolved` exits 0 with the notes."""
-    from probegen.cli import ExitCode, main
+    from probegen.cli.app import ExitCode, main
 
     model = _need(NIST / "nist_ftc_09_asme1_rd.stp")
     spec, notes = all_revolved_spec(model, load_profile(MACHINE))

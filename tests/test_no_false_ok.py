@@ -4,7 +4,7 @@ results.json, results.csv, the HTML report, QIF) and end with exit code 11
 (``INCOMPLETE``), never with a green OK and 0; a spec of lines and planes alone is
 ingested and its faces evaluated, against the truth planted on the virtual machine.
 
-Every case goes through ``probegen.cli.main`` like a user; the logs are the sample
+Every case goes through ``probegen.cli.app.main`` like a user; the logs are the sample
 sphere test's log (samples/sphere25/sphere_test.log, P_FTU 0.0016) edited in the test,
 and one made by the virtual machine for the lines-and-planes spec.
 """
@@ -28,9 +28,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probegen import cad
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 from probegen.errors import ProbegenError
-from probegen.evaluate import run_status
+from probegen.evaluate.characteristics import run_status
 
 LOG = REPO / "samples/sphere25/sphere_test.log"
 GREEN = 'class="badge ok"'
@@ -210,7 +210,7 @@ def test_out_of_tolerance_wins_over_not_evaluated(tmp_path: Path,
 
 @pytest.fixture(scope="module")
 def toleranced_spec(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     return load_spec(sphere_spec(tmp_path_factory.mktemp("spec")))
 
@@ -223,7 +223,7 @@ def test_only_a_whole_run_is_ok(toleranced_spec: Any, dropped: set[int], blind: 
     """Any mix of dropped touches, no-contact touches and a missing end: OK exactly when
     nothing is missing, else NOT EVALUATED (the sample meets its limits), or an error
     when no touch is left; never a traceback."""
-    from probegen.ingest import ingest, to_csv, to_json
+    from probegen.evaluate.ingest import ingest, to_csv, to_json
 
     out = []
     for line in LOG.read_text().splitlines():
@@ -315,7 +315,7 @@ def faces_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from probegen.planning import plan_program
     from probegen.sim.contact import PlacedPart
     from probegen.sim.vm import VirtualMachine, run_text
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     tmp = tmp_path_factory.mktemp("faces")
     spec = tmp / "faces.toml"
@@ -391,7 +391,7 @@ def test_a_face_cut_short_is_not_evaluated(faces_log: Path, tmp_path: Path,
 
 def test_post_ingest_of_a_run_cut_short(tmp_path: Path,
                                         capsys: pytest.CaptureFixture[str]) -> None:
-    from probegen.dmis import parse_dmis
+    from probegen.dmis.reader import parse_dmis
     from probegen.machine.profile import load_profile
     from probegen.post.featuremap import dumps, feature_map
     from probegen.post.frontend import post_dmis

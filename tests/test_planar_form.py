@@ -17,11 +17,11 @@ import pytest
 from conftest import REPO
 from test_no_false_ok import FACES, faces_log  # noqa: F401  (the module-scoped fixture)
 
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 from probegen.errors import SpecError
-from probegen.evaluate_planar import planar_form
+from probegen.evaluate.planar import planar_form
 from probegen.geometry.fits import fit_line_2d, fit_plane
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 H = 0.013
 """The constructed zones' width, mm."""

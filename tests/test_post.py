@@ -27,17 +27,11 @@ from mutations import mutate
 from test_linuxcnc import Standalone, assert_close, motions, rs274, run_rs274  # noqa: F401
 
 from probegen import cad, ir
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 from probegen.dialects import get_dialect
-from probegen.dmis import parse_dmis
-from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
-from probegen.errors import (
-    CollisionError,
-    ProbegenError,
-    ResultsParseError,
-    UnsupportedError,
-)
-from probegen.identity import map_identity
+from probegen.dmis.reader import parse_dmis
+from probegen.errors import CollisionError, ProbegenError, ResultsParseError, UnsupportedError
+from probegen.ir.identity import map_identity
 from probegen.machine.kinematics import Machine, load_machine
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.machine.profile import load_profile
@@ -47,6 +41,7 @@ from probegen.post.featuremap import dumps, feature_map, parse_feature_map, read
 from probegen.post.files import PostOutput, post_file
 from probegen.post.frontend import post_dmis
 from probegen.results import parse_dprnt
+from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import CmmAdapter, VirtualMachine, run_text
 

@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from probegen import progress
+from probegen.cli import progress
 
 
 class Tty(io.StringIO):
@@ -35,7 +35,7 @@ def test_bar_is_silent_off_a_terminal_and_when_quiet(monkeypatch: pytest.MonkeyP
 
 
 def test_quiet_flag_turns_bars_off() -> None:
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     assert main(["--quiet", "sphere-points"]) == 0
     assert progress.ENABLED is False

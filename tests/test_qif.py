@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 from conftest import REPO, SHARED, assert_golden
 
-import probegen.qif
+import probegen.qif.export
 from probegen.errors import ProbegenError
-from probegen.ingest import Ingested, ingest
-from probegen.qif import (
+from probegen.evaluate.ingest import Ingested, ingest
+from probegen.qif.export import (
     SCHEMA_ENV,
     QifValidationError,
     dmis_output_to_qif,
@@ -32,7 +32,7 @@ from probegen.qif import (
     write_qif,
 )
 from probegen.results import parse_dmis_output, read_dmis_output
-from probegen.spec import Spec, SphereTolerance, load_spec
+from probegen.spec.model import Spec, SphereTolerance, load_spec
 
 SCHEMA = SHARED / "ref/qif/schema"
 GOLDEN = REPO / "tests/golden/qif"
@@ -369,8 +369,8 @@ def test_write_qif_validates_before_writing(schema: Path, sphere: Ingest, tmp_pa
 
 
 def test_importing_the_exporter_is_light() -> None:
-    code = ("import sys, probegen.qif; "
-            "print(sorted(m for m in ('xmlschema', 'numpy', 'probegen.ingest', 'lark') "
+    code = ("import sys, probegen.qif.export; "
+            "print(sorted(m for m in ('xmlschema', 'numpy', 'probegen.evaluate.ingest', 'lark') "
             "if m in sys.modules))")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=True, cwd=REPO)
@@ -378,4 +378,4 @@ def test_importing_the_exporter_is_light() -> None:
 
 
 def test_module_example() -> None:
-    assert doctest.testmod(probegen.qif).failed == 0
+    assert doctest.testmod(probegen.qif.export).failed == 0

@@ -21,13 +21,13 @@ from test_no_false_ok import faces_log  # noqa: F401  (the module-scoped fixture
 from test_planar_form import bumped, faces_spec
 from test_uncertainty import BORE, bore_centres
 
-from probegen.evaluate_freeform import NominalPoint, evaluate_freeform
-from probegen.evaluate_revolved import Nominal, RevolvedResult, evaluate_revolved
-from probegen.ingest import Ingested, ingest
-from probegen.qif import ingested_to_qif, load_schema, validate_qif
+from probegen.evaluate.freeform import NominalPoint, evaluate_freeform
+from probegen.evaluate.ingest import Ingested, ingest
+from probegen.evaluate.revolved import Nominal, RevolvedResult, evaluate_revolved
+from probegen.geometry.uncertainty import Budget
+from probegen.qif.export import ingested_to_qif, load_schema, validate_qif
 from probegen.results.dprnt_records import DprntLog
-from probegen.spec import FREEFORM_STRIDE, load_spec
-from probegen.uncertainty import Budget
+from probegen.spec.model import FREEFORM_STRIDE, load_spec
 
 SCHEMA = SHARED / "ref/qif/schema"
 NS = {"q": "http://qifstandards.org/xsd/qif3"}
@@ -215,7 +215,7 @@ def test_cli_exports_a_revolved_log(in_repo: Path, tmp_path: Path,
     """``probegen qif LOG --spec``: the bore block's bore (cylinder) and boss (circle) from
     a virtual machine run, validated against the schema by the command itself."""
     from probegen import cad
-    from probegen.cli import main
+    from probegen.cli.app import main
     from probegen.dialects import get_dialect
     from probegen.machine.probe_model import ProbeModel
     from probegen.planning import plan_program
@@ -250,7 +250,7 @@ def test_cli_exports_lines_and_planes(faces_log: Path, tmp_path: Path,  # noqa: 
     their position as a line and surface profile about the nominal face (TOP's zone
     ``[-0.2, 0.5]`` offset by 0.15), the angle, straightness and flatness with their
     method; schema-valid."""
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     out = tmp_path / "faces.qif"
     spec = faces_spec(tmp_path, "form = 0.02", low=-0.2)

@@ -40,8 +40,8 @@ SAMPLE = REPO / "samples" / "sphere25"
 
 @pytest.fixture(scope="module")
 def ingested() -> Any:
-    from probegen.ingest import ingest
-    from probegen.spec import load_spec
+    from probegen.evaluate.ingest import ingest
+    from probegen.spec.model import load_spec
 
     spec = load_spec(SAMPLE / "sphere_test.toml")
     return ingest(SAMPLE / "sphere_test.log", spec, with_path=True)
@@ -49,7 +49,7 @@ def ingested() -> Any:
 
 @pytest.fixture(scope="module")
 def results(ingested: Any) -> dict[str, Any]:
-    from probegen.ingest import to_json
+    from probegen.evaluate.ingest import to_json
 
     doc: dict[str, Any] = json.loads(to_json(ingested))
     return doc
@@ -241,9 +241,9 @@ def decided(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any
 
     from probegen.cad import load_step
     from probegen.dialects import get_dialect
-    from probegen.ingest import ingest, to_json
+    from probegen.evaluate.ingest import ingest, to_json
     from probegen.planning import plan_program
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     spec = load_spec(REPO / SPEC)
     text = get_dialect("fanuc").generate(plan_program(spec, runtime_variables=True).program)
@@ -375,7 +375,7 @@ def test_importing_the_report_does_not_load_jinja() -> None:
 
 
 def _results_text(ingested: Any) -> str:
-    from probegen.ingest import to_json
+    from probegen.evaluate.ingest import to_json
 
     return to_json(ingested)
 

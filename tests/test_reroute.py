@@ -17,7 +17,7 @@ from conftest import REPO
 from probegen.errors import CollisionError
 from probegen.planning import plan_program
 from probegen.planning.revolved import PathKind
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 PROFILE = REPO / "samples/machines/vmc-fanuc.toml"
 

@@ -8,10 +8,10 @@ import pytest
 from conftest import REPO
 
 from probegen import ir
-from probegen.cli import ExitCode, main
+from probegen.cli.app import ExitCode, main
 from probegen.errors import PlanningError, SpecError
 from probegen.planning import plan_program
-from probegen.spec import RevolvedSpec, RevolvedTolerance, load_spec
+from probegen.spec.model import RevolvedSpec, RevolvedTolerance, load_spec
 
 PROFILE = REPO / "samples/machines/vmc-fanuc.toml"
 

@@ -28,7 +28,7 @@ from probegen.planning.rotary import (
 )
 from probegen.planning.rotary_spec import load_rotary_spec
 from probegen.results import parse_dprnt
-from probegen.sim.macrob import FreeMachine, run_program
+from probegen.sim.macrob.machine import FreeMachine, run_program
 
 SAMPLES = ("m4", "pivot")
 rs274 = test_linuxcnc.rs274

@@ -26,7 +26,7 @@ from probegen.planning.rotary import RotaryPlan, compensation_program, plan_rota
 from probegen.planning.rotary_spec import load_rotary_spec
 from probegen.results.dprnt import parse_dprnt
 from probegen.sim.contact import PlacedPart
-from probegen.sim.macrob import FreeMachine, RunResult, Settings, run_program
+from probegen.sim.macrob.machine import FreeMachine, RunResult, Settings, run_program
 from probegen.sim.vm import VirtualMachine, run_text
 
 UM, URAD = 1e-3, 1e-6
@@ -182,7 +182,7 @@ def test_pivot_missing_station_is_a_calibration_error(tmp_path: Path) -> None:
 
 
 def test_cli_plan_sim_identify(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from probegen.cli import main
+    from probegen.cli.app import main
 
     spec = str(REPO / "samples/rotary/m4.toml")
     assert main(["-q", "rotary", "plan", spec, "-o", str(tmp_path)]) == 0

@@ -11,9 +11,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import ProbegenError, SpecError
-from probegen.ir_actions import describe, point_index, point_names
-from probegen.spec import load_spec
-from probegen.spec_actions import Actions, AlignAction, PlanarSpec, ToolAction, WorkOffsetAction
+from probegen.ir.actions import describe, point_index, point_names
+from probegen.spec.actions import Actions, AlignAction, PlanarSpec, ToolAction, WorkOffsetAction
+from probegen.spec.model import load_spec
 
 SAMPLE = (REPO / "samples/bore_block/bore_block_actions.toml").read_text()
 BASE = (SAMPLE.replace('"../machines/vmc-fanuc.toml"',
@@ -110,7 +110,7 @@ def test_point_names_round_trip() -> None:
 
 
 def test_describe_names_the_spec_key() -> None:
-    from probegen.ir_actions import UpdateTool
+    from probegen.ir.actions import UpdateTool
     assert describe(UpdateTool("B", 1, "radius", "B.E", 0.0, 0.1, 1.0)) == \
         "update_tool of feature B"
 

@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import ProbegenError
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 SAMPLE = (REPO / "samples/sphere25/sphere_test_iso.toml").read_text()
 PROFILE = str(REPO / "samples/machines/vmc-fanuc.toml")

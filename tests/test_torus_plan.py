@@ -21,7 +21,7 @@ from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import VirtualMachine, run_text
-from probegen.spec import load_spec
+from probegen.spec.model import load_spec
 
 MODEL = REPO / "samples/revolved_block/revolved_block.step"
 PROFILE = REPO / "samples/machines/vmc-fanuc.toml"

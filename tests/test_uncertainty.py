@@ -1,4 +1,4 @@
-"""Stated uncertainty (probegen.uncertainty, evaluate_uncertainty) and ISO 14253-1 decisions.
+"""Stated uncertainty (geometry.uncertainty, evaluate.uncertainty) and ISO 14253-1 decisions.
 
 The coverage test simulates 200 noisy repeats of a bore (a cylinder, 3 sections of 8
 touches) and of a sphere test: Gaussian noise on the ball centres and, for the bore, a
@@ -22,16 +22,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
 
-from probegen.cli import main
-from probegen.cli_exit import ExitCode
-from probegen.compensate import load_calibration
-from probegen.errors import ProbegenError, SpecError
-from probegen.evaluate import Characteristic, evaluate_sphere_test
-from probegen.evaluate_revolved import Nominal, evaluate_revolved
-from probegen.ingest import ingest
+from probegen.cli.app import main
+from probegen.errors import ExitCode, ProbegenError, SpecError
+from probegen.evaluate.characteristics import Characteristic, evaluate_sphere_test
+from probegen.evaluate.ingest import ingest
+from probegen.evaluate.revolved import Nominal, evaluate_revolved
+from probegen.geometry.uncertainty import Budget, decide, few_dof_note, verdict
+from probegen.machine.calibration import load_calibration
 from probegen.machine.profile import load_profile
-from probegen.spec import load_spec
-from probegen.uncertainty import Budget, decide, few_dof_note, verdict
+from probegen.spec.model import load_spec
 
 REPEATS = 200
 NOISE = 0.002  # mm, per coordinate of each ball centre

@@ -40,9 +40,9 @@ from probegen.calibrate.identify_model import (
 )
 from probegen.errors import CalibrationError
 from probegen.geometry.orthopoly import AxisRange, basis, project
+from probegen.geometry.uncertainty import t_factor
 from probegen.machine.errors_model import ErrorModel
 from probegen.machine.kinematics import PLANES
-from probegen.uncertainty import t_factor
 
 SQUARENESS = {"XY": "S_XY", "XZ": "S_XZ", "YZ": "S_YZ"}
 

@@ -48,15 +48,15 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.errors import CalibrationError
 from probegen.geometry.fits import fit_circle_2d, fit_circle_3d, fit_sphere
 from probegen.geometry.fits_results import Circle3dFit
+from probegen.geometry.uncertainty import t_factor
+from probegen.machine.calibration import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.machine.kinematics import head_shift
 from probegen.machine.probe_model import tilted_probe_frame
 from probegen.planning.rotary import RotaryPlan, Station
 from probegen.results.dprnt import DprntLog
-from probegen.uncertainty import t_factor
 
 Vec3 = tuple[float, float, float]
 Model = Callable[[np.ndarray], np.ndarray]

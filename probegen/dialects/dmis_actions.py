@@ -22,7 +22,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from probegen.errors import UnsupportedError
-from probegen.ir_actions import ActionNode, Align, Check, SetWorkOffset, UpdateTool, describe
+from probegen.ir.actions import ActionNode, Align, Check, SetWorkOffset, UpdateTool, describe
 
 if TYPE_CHECKING:
     from probegen.dialects.dmis import Dmis

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from probegen.ir_actions import Align, Check, SetWorkOffset, UpdateTool, result
+from probegen.ir.actions import Align, Check, SetWorkOffset, UpdateTool, result
 
 if TYPE_CHECKING:
     from probegen.dialects.fanuc import Fanuc

@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 from probegen import ir
 from probegen.dialects.fanuc import SCRATCH, Fanuc
 from probegen.errors import UnsupportedError
-from probegen.ir_actions import describe
+from probegen.ir.actions import describe
 
 
 class Haas(Fanuc):

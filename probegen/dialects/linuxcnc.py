@@ -43,7 +43,7 @@ from probegen.constants import tol
 from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import feature_owners
 from probegen.errors import UnsupportedError
-from probegen.ir_actions import describe
+from probegen.ir.actions import describe
 
 _ACTIVE_COMMENT = re.compile(
     r"\s*(MSG|DEBUG|PRINT|LOG|LOGOPEN|LOGAPPEND|LOGCLOSE|PROBEOPEN|PROBECLOSE|ABORT|PY)\b",

@@ -21,11 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.geometry.fits_conditioning import assess_model
-from probegen.geometry.fits_initial import (
-    algebraic_circle,
-    algebraic_cone,
-    candidate_axes,
-)
+from probegen.geometry.fits_initial import algebraic_circle, algebraic_cone, candidate_axes
 from probegen.geometry.fits_results import ConeFit, CylinderFit, TorusFit
 from probegen.geometry.fits_solver import (
     FloatArray,

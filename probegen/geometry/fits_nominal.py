@@ -38,13 +38,7 @@ from probegen.constants import tol
 from probegen.errors import ProbegenError
 from probegen.geometry.fits import fit_circle_3d, fit_sphere
 from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
-from probegen.geometry.fits_results import (
-    Circle3dFit,
-    ConeFit,
-    CylinderFit,
-    SphereFit,
-    TorusFit,
-)
+from probegen.geometry.fits_results import Circle3dFit, ConeFit, CylinderFit, SphereFit, TorusFit
 from probegen.geometry.fits_solver import FloatArray, subsample
 from probegen.geometry.frames import orthonormal_basis, unit
 

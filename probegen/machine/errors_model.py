@@ -54,7 +54,7 @@ from numpy.polynomial import polynomial as npoly
 from numpy.typing import ArrayLike, NDArray
 
 from probegen.errors import ProbegenError, SpecError
-from probegen.tomlread import Table, load_toml
+from probegen.files import Table, load_toml
 
 FloatArray = NDArray[np.float64]
 

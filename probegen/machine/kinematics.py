@@ -59,8 +59,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.errors import ProbegenError
+from probegen.files import Table, load_toml
 from probegen.machine.errors_model import ErrorModel, FloatArray, read_errors
-from probegen.tomlread import Table, load_toml
 
 
 class Topology(StrEnum):

@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.constants import MM_PER_INCH
-from probegen.tomlread import Table, load_toml
+from probegen.files import Table, load_toml
 
 if TYPE_CHECKING:
-    from probegen.compensate import ProbeCalibration
+    from probegen.machine.calibration import ProbeCalibration
 
 WORK_OFFSETS = ("G54", "G55", "G56", "G57", "G58", "G59")
 

@@ -16,12 +16,7 @@ from typing import Any
 from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
-from probegen.planning.actions import (
-    final_actions,
-    planar_check,
-    revolved_check,
-    sphere_offset,
-)
+from probegen.planning.actions import final_actions, planar_check, revolved_check, sphere_offset
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.identity import program_identity
@@ -32,8 +27,8 @@ from probegen.planning.revolved import Comparison
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
 from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
-from probegen.spec import FreeformSpec, RevolvedSpec, Spec
-from probegen.spec_actions import PlanarSpec
+from probegen.spec.actions import PlanarSpec
+from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
 
 
 @dataclass(frozen=True, slots=True)

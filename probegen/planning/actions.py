@@ -17,13 +17,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from probegen import ir
-from probegen.compensate import calibrated_centres, for_stylus
 from probegen.errors import SpecError
-from probegen.ir_actions import Align, Check, Limit, SetWorkOffset, UpdateTool, point_names, result
+from probegen.ir.actions import Align, Check, Limit, SetWorkOffset, UpdateTool, point_names, result
+from probegen.machine.calibration import calibrated_centres, for_stylus
 from probegen.machine.profile import MachineProfile
 from probegen.planning.planar import PlanarPlan, direction_degrees
-from probegen.spec import RevolvedSpec, SphereTest
-from probegen.spec_actions import PlanarSpec
+from probegen.spec.actions import PlanarSpec
+from probegen.spec.model import RevolvedSpec, SphereTest
 
 AXIS_ALIGNED = 1.0 - 1e-9
 """A line's or plane's normal counts as along an axis when that component exceeds this."""

@@ -32,11 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from probegen import ir
-from probegen.compensate_freeform import micro_plane_offsets, two_d_offsets
+from probegen.evaluate.compensate_freeform import micro_plane_offsets, two_d_offsets
 from probegen.geometry.frames import FloatArray
 from probegen.geometry.offset_surface import ParamSurface, ball_centres
-from probegen.spec import FREEFORM_EXTRA as EXTRA_TOUCHES
-from probegen.spec import FREEFORM_STRIDE as INDEX_STRIDE
+from probegen.spec.model import FREEFORM_EXTRA as EXTRA_TOUCHES
+from probegen.spec.model import FREEFORM_STRIDE as INDEX_STRIDE
 
 Vec3 = tuple[float, float, float]
 
@@ -93,7 +93,7 @@ def guide_lines(points: FloatArray, normals: FloatArray, d: FloatArray, method: 
                 spacing: float) -> tuple[FloatArray, np.ndarray, np.ndarray]:
     """Origins of every guide line: (m, 3), with the guide row (m,) and role (m,) of each.
 
-    The extra lines sit where :mod:`probegen.compensate_freeform` expects them
+    The extra lines sit where :mod:`probegen.evaluate.compensate_freeform` expects them
     (``two_d_offsets``, ``micro_plane_offsets``), so plan and compensation agree.
 
     Args:

@@ -36,7 +36,7 @@ from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import Obstacle, check_program, load_model, obstacle_for
 from probegen.planning.freeform import PlannedTouch, group_nodes, plan_touches
 from probegen.planning.heightmap import clear_paths
-from probegen.spec import FreeformSpec
+from probegen.spec.model import FreeformSpec
 
 Vec3 = tuple[float, float, float]
 

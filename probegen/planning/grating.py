@@ -34,10 +34,10 @@ import numpy as np
 
 from probegen import ir
 from probegen.errors import CollisionError, SpecError
+from probegen.files import Table, load_toml
 from probegen.machine.kinematics import PLANE_OUTWARD as OUTWARD
 from probegen.machine.kinematics import PLANES
 from probegen.machine.profile import DEFAULT_RESET, MachineProfile
-from probegen.tomlread import Table, load_toml
 
 SEED_NUMBER = {"XY": 1, "XZ": 2, "YZ": 3}
 """The seed's plane numbers (lines L10-L14, L20-L24, L30-L34)."""

@@ -1,4 +1,4 @@
-"""The planning half of :mod:`probegen.identity`: a planned program's identity and its
+"""The planning half of :mod:`probegen.ir.identity`: a planned program's identity and its
 touches evaluated at nominal (see there for what the identity covers and why)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from typing import Any, Literal
 import numpy as np
 
 from probegen import ir
-from probegen.identity import PlannedTouch, canonical, identity_of, vec3_of
+from probegen.ir.identity import PlannedTouch, canonical, identity_of, vec3_of
 from probegen.planning.collision import _Walker
 
 

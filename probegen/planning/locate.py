@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from probegen import ir
-from probegen.compensate import calibrated_centres, for_stylus
+from probegen.machine.calibration import calibrated_centres, for_stylus
 from probegen.machine.profile import MachineProfile
 from probegen.planning.sphere_test import SphereTestPlan, measure_body
 

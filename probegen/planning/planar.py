@@ -22,7 +22,7 @@ from pathlib import Path
 from probegen import ir
 from probegen.errors import ModelError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.spec_actions import PlanarSpec
+from probegen.spec.actions import PlanarSpec
 
 ON_FACE = 1e-3
 """How far (mm) a contact point may be from the face's plane."""
@@ -112,7 +112,7 @@ def planar_nodes(p: PlanarPlan, machine: MachineProfile, clearance_z: float,
     """The feature's nodes: a rapid above the first start, then its block; each touch
     keeps the ball centre's axes ``stores`` (e.g. ``"XY"``) in run-time values for a
     ``Check``."""
-    from probegen.ir_actions import point_names
+    from probegen.ir.actions import point_names
 
     first, last = p.starts[0], p.starts[-1]
     d = p.spec.retract if p.spec.retract is not None else machine.probe.approach

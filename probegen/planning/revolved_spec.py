@@ -24,14 +24,8 @@ from probegen.errors import CollisionError, ModelError, PlanningError, ProbegenE
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import file_key, obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
-from probegen.planning.revolved import (
-    FeaturePlan,
-    Section,
-    feature_nodes,
-    plan_feature,
-    section_of,
-)
-from probegen.spec import RevolvedSpec, Spec
+from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.spec.model import RevolvedSpec, Spec
 
 TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
                 "sphere": "sphere", "torus": "torus"}
@@ -390,7 +384,7 @@ def check_alone(p: RevolvedPlan, model_path: Path, machine: MachineProfile,
     """
     from probegen.planning import make_setup
     from probegen.planning.collision import check_program, obstacle_for
-    from probegen.spec import Spec
+    from probegen.spec.model import Spec
 
     spec = Spec(source=str(model_path), model=model_path, machine=machine,
                 dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,

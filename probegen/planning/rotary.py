@@ -40,7 +40,7 @@ from probegen.machine.kinematics import head_shift
 from probegen.planning import make_setup
 from probegen.planning.collision import MIN_STEP, Stylus, _sweep
 from probegen.planning.rotary_spec import RotarySpec
-from probegen.spec import Spec
+from probegen.spec.model import Spec
 
 Vec3 = tuple[float, float, float]
 

@@ -37,9 +37,9 @@ from pathlib import Path
 from typing import Any
 
 from probegen.errors import SpecError
+from probegen.files import Table, load_toml
 from probegen.machine.profile import MachineProfile
-from probegen.spec import _machine, _program_name
-from probegen.tomlread import Table, load_toml
+from probegen.spec.model import _machine, _program_name
 
 Vec3 = tuple[float, float, float]
 KINDS = ("m4", "pivot")

@@ -28,7 +28,7 @@ from probegen import ir
 from probegen.errors import ModelError, SpecError
 from probegen.geometry import sphere_layout as sl
 from probegen.machine.profile import MachineProfile
-from probegen.spec import SphereTest, Vec3
+from probegen.spec.model import SphereTest, Vec3
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,6 +11,6 @@
   program's features, tolerances and output file, by running the DMIS program again
   with the logged touches in place of a CMM's.
 
-DMIS semantics (frames, features, fits, tolerances) come from :mod:`probegen.dmisrun`,
+DMIS semantics (frames, features, fits, tolerances) come from :mod:`probegen.sim.cmm`,
 the interpreter the virtual CMM runs too; nothing here imports ``probegen.sim``.
 """

@@ -5,7 +5,7 @@ interpreter, this time against a *replaying* machine: its n-th probing move retu
 ball centre the log holds for the map's n-th touch (matched by the printed id and
 index, not by log order).  So every measured feature is fitted, compensated, constructed,
 aligned, toleranced and written to a DMIS output file by the same code as on the
-virtual CMM (:mod:`probegen.dmisrun`): features of the DMIS kinds, with the CMM's
+virtual CMM (:mod:`probegen.sim.cmm`): features of the DMIS kinds, with the CMM's
 fits (feature compensation, the cylinder fit started from the nominal axis).
 
 With a probe calibration (``post-ingest --calibration``) each replayed ball centre is
@@ -14,7 +14,7 @@ reverse of the probing direction, ``r`` the posted ball radius the DMIS program
 compensates with), so the CMM code's one-radius compensation gives the calibrated
 contact point.
 
-Checks: the log is first checked against the map (:mod:`probegen.logcheck`: the run
+Checks: the log is first checked against the map (:mod:`probegen.results.logcheck`: the run
 used, the program number and identity of the posted program, unknown and duplicate point
 ids); every touch of the map must be in the log (the last one read after a restart),
 in the log's units, and lie on its probing line (:data:`ON_LINE`) within its reach; a
@@ -27,16 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
-from probegen.compensate import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.constants import MM_PER_INCH
-from probegen.dmis import parse_dmis
-from probegen.dmisrun.features import DmisFeature, arr, vec3
-from probegen.dmisrun.interpreter import DmisRunResult, run_dmis
+from probegen.dmis.reader import parse_dmis
 from probegen.errors import IncompleteRunError, ResultsParseError
-from probegen.identity import PlannedTouch, map_identity
-from probegen.logcheck import check_log
+from probegen.ir.identity import PlannedTouch, map_identity
+from probegen.machine.calibration import ProbeCalibration, calibrated_centres, for_stylus
 from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
 from probegen.results.dprnt import DprntLog, read_dprnt
+from probegen.results.logcheck import check_log
+from probegen.sim.cmm.features import DmisFeature, arr, vec3
+from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
 
 Vec3 = tuple[float, float, float]
 
@@ -144,9 +144,9 @@ def _cut(log: DprntLog) -> dict[tuple[str, int], str]:
 
 
 def run_status(log: DprntLog, result: DmisRunResult) -> str:
-    """The run's status (:func:`probegen.evaluate.run_status`): its tolerances'
+    """The run's status (:func:`probegen.evaluate.characteristics.run_status`): its tolerances'
     verdicts; NOT EVALUATED when the log did not finish or a touch had no contact."""
-    from probegen.evaluate import run_status as status
+    from probegen.evaluate.characteristics import run_status as status
 
     cut = _cut(log)
     return status((t.in_tolerance for t in result.tolerances.values()),
@@ -160,7 +160,7 @@ def ingest_file(log: str | Path, features: str | Path,
     """Evaluate a captured DPRNT ``log`` with the feature map ``features`` (and the probe
     calibration's radii when one is given); returns the
     run of the log used, the DMIS run and the notes of the log's checks (``run``,
-    ``ignore_identity``: see :func:`probegen.logcheck.check_log`).
+    ``ignore_identity``: see :func:`probegen.results.logcheck.check_log`).
 
     Raises:
         ProbegenError: the log belongs to another program, or names points the map

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from probegen.dmis import logical_statements
+from probegen.dmis.reader import logical_statements
 from probegen.errors import ResultsParseError
 
 if TYPE_CHECKING:
@@ -87,7 +87,7 @@ def as_posted(text: str, dropped: tuple[int, ...]) -> str:
 def feature_map(posted: PostedProgram, data: str | bytes, source: str,
                 dialect: str) -> FeatureMap:
     """The feature map of ``posted``, posted from the DMIS file ``source`` whose content is
-    ``data`` (bytes as read: UTF-8, else Latin-1, as ``probegen.dmis.read_dmis`` reads)."""
+    ``data`` (bytes as read: UTF-8, else Latin-1, as ``probegen.dmis.reader.read_dmis`` reads)."""
     raw = data.encode() if isinstance(data, str) else data
     try:
         text = raw.decode("utf-8")

@@ -13,11 +13,11 @@ from pathlib import Path
 
 from probegen import ir
 from probegen.dialects import get_dialect
-from probegen.dmis import read_dmis
+from probegen.dmis.reader import read_dmis
 from probegen.errors import UnsupportedError
-from probegen.identity import map_identity
+from probegen.files import write_file
+from probegen.ir.identity import map_identity
 from probegen.machine.profile import MachineProfile
-from probegen.outputs import write_file
 from probegen.planning.collision import MeshObstacle, load_model
 from probegen.post.featuremap import FeatureMap, dumps, feature_map
 from probegen.post.frontend import PostedProgram, post_dmis

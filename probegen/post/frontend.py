@@ -1,6 +1,6 @@
 """The post-processor's front end: a DMIS program → ``ir.Program`` for a machine tool.
 
-The DMIS program runs once through the DMIS interpreter (:mod:`probegen.dmisrun`)
+The DMIS program runs once through the DMIS interpreter (:mod:`probegen.sim.cmm`)
 against a *recording* machine that finds the part exactly where the nominals put it:
 every probe returns the nominal ball centre.  So the interpreter resolves units, sensors,
 ``SNSET``, frames (``DATSET``, ``TRANS``, ``ROTATE``, ``RECALL``), ``CONST`` and
@@ -37,20 +37,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from probegen import ir
-from probegen.dmis import DmisFile, Statement
-from probegen.dmisrun.features import arr, vec3
-from probegen.dmisrun.interpreter import (
-    SkippedStatement,
-    execute_statement,
-    record_skipped,
-)
-from probegen.dmisrun.state import NotExecutable, VmState
+from probegen.dmis.reader import DmisFile, Statement
 from probegen.errors import CollisionError, UnsupportedError
 from probegen.geometry.frames import FloatArray
 from probegen.machine.profile import MachineProfile
 from probegen.planning import setup_for
 from probegen.planning.collision import Obstacle, SegmentClearance, check_program
 from probegen.post.featuremap import PostTouch
+from probegen.sim.cmm.features import arr, vec3
+from probegen.sim.cmm.interpreter import SkippedStatement, execute_statement, record_skipped
+from probegen.sim.cmm.state import NotExecutable, VmState
 
 Vec3 = tuple[float, float, float]
 

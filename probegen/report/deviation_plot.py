@@ -5,7 +5,7 @@ The points are drawn in the world plane that faces the mean surface normal best 
 grows with ``|e|``, light where material is added (``e > 0``), dark where it is missing,
 as the report's other plots do (``palette.by_sign``).  Deterministic text, no JavaScript.
 
-Feed it from a ``probegen.compensate_freeform.DeviationMap``:
+Feed it from a ``probegen.evaluate.compensate_freeform.DeviationMap``:
 ``deviation_map_svg(dmap.nominal, dmap.deviation * 1000, normals=dmap.normals, ...)``.
 """
 

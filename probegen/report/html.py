@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from probegen.errors import ProbegenError
-from probegen.evaluate import NOT_EVALUATED, NOT_OK, OK, UNTOLERANCED
-from probegen.outputs import write_file
+from probegen.evaluate.characteristics import NOT_EVALUATED, NOT_OK, OK, UNTOLERANCED
+from probegen.files import write_file
 from probegen.report import sections
 from probegen.report.model import Characteristic, Results, read_results
 from probegen.report.numbers import fixed, signed

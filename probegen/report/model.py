@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import Any, NoReturn
 
 from probegen.errors import ProbegenError
-from probegen.evaluate import (
+from probegen.evaluate.characteristics import (
     NOT_EVALUATED,
     NOT_OK,
     OK,
@@ -153,11 +153,11 @@ class Function:
 
 @dataclass(frozen=True, slots=True)
 class Decision:
-    """One value of an in-process decision (``probegen.ingest_actions.Decision``).
+    """One value of an in-process decision (``probegen.evaluate.actions.Decision``).
 
     Attributes:
         feature: feature id.
-        key: ``X Y D F P A E NG C`` (``probegen.ir_actions``; ``C`` the tool correction).
+        key: ``X Y D F P A E NG C`` (``probegen.ir.actions``; ``C`` the tool correction).
         offline: the value ``ingest`` computed from the log's points (mm, degrees; ``NG``
             1 or 0); None: too few points.
         machine: the value the machine printed in its ``RES`` line; None: not printed.
@@ -234,7 +234,7 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
 
 
 def _run_status(features: Sequence[Feature], complete: bool | None) -> str:
-    """The run's status for results without one: ``probegen.evaluate.run_status`` of
+    """The run's status for results without one: ``probegen.evaluate.characteristics.run_status`` of
     the features' statuses."""
     statuses = [f.status for f in features]
     return run_status(({OK: True, NOT_OK: False}.get(s) for s in statuses),

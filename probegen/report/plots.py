@@ -13,19 +13,7 @@ from collections.abc import Sequence
 
 from probegen.report import palette
 from probegen.report.numbers import fixed, signed
-from probegen.report.svg import (
-    FONT,
-    GRID,
-    INK,
-    Frame,
-    axes,
-    esc,
-    framed,
-    line,
-    px,
-    svg_open,
-    text,
-)
+from probegen.report.svg import FONT, GRID, INK, Frame, axes, esc, framed, line, px, svg_open, text
 
 WIDTH = 560.0
 HEIGHT = 280.0

@@ -77,7 +77,7 @@ DECISION_KEYS = {
     "A": ("angle from nominal", "\u00b0"), "E": ("excess material", "mm"),
     "NG": ("limit exceeded", ""), "C": ("tool wear correction", "mm"),
 }
-"""What each decision key is (``probegen.ir_actions``) and its unit."""
+"""What each decision key is (``probegen.ir.actions``) and its unit."""
 STOPPED = "the program stopped: ERR "
 """How ``probegen ingest`` starts the note of an alarm (``ERR <code> <feature> ..``)."""
 

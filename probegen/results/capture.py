@@ -32,7 +32,7 @@ from typing import BinaryIO, Literal
 import serial
 
 from probegen.errors import ProbegenError
-from probegen.outputs import OutputError, output_folder
+from probegen.files import OutputError, output_folder
 
 __all__ = [
     "DEFAULT_BAUDRATE",

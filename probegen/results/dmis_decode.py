@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from probegen.dmis import Label, Param, Text, format_param
+from probegen.dmis.reader import Label, Param, Text, format_param
 from probegen.errors import did_you_mean
 from probegen.results.dmis_records import Vec3
 

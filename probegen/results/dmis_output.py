@@ -19,7 +19,7 @@ vendors write it (``179.99, 90.01, 90.0``), is recognised and turned into cosine
 Nominals (``F(name)=FEAT/...``), datums, sensors and every other statement are read
 past.
 
-Robustness is statement by statement (:func:`probegen.dmis.parse_dmis_recovering`): a
+Robustness is statement by statement (:func:`probegen.dmis.reader.parse_dmis_recovering`): a
 statement that does not parse, or a feature or tolerance whose parameters do not fit
 its type, becomes a :class:`~probegen.errors.Diagnostic` (line, column, what was
 expected, what was found, caret) and every good statement is still returned.
@@ -36,7 +36,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 
-from probegen.dmis import Label, Param, Statement, parse_dmis_recovering
+from probegen.dmis.reader import Label, Param, Statement, parse_dmis_recovering
 from probegen.errors import Diagnostic, ProbegenError, strict_error
 from probegen.results.dmis_decode import (
     DEGREES_PER_UNIT,

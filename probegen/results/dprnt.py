@@ -32,7 +32,6 @@ import re
 from typing import TYPE_CHECKING
 
 from probegen.errors import ProbegenError, strict_error
-from probegen.gcpause import collector_paused
 from probegen.results.dprnt_fast import _read_lines
 from probegen.results.dprnt_records import (
     FORMAT_VERSION,
@@ -44,6 +43,7 @@ from probegen.results.dprnt_records import (
     Touch,
     _Builder,
 )
+from probegen.results.gcpause import collector_paused
 
 if TYPE_CHECKING:
     import numpy as np

@@ -51,13 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.cad import Model
-from probegen.cad.exact import (
-    ExactFaces,
-    FloatArray,
-    face_roots,
-    nearest_on_surface,
-    sphere_roots,
-)
+from probegen.cad.exact import ExactFaces, FloatArray, face_roots, nearest_on_surface, sphere_roots
 from probegen.constants import tol
 from probegen.errors import ProbegenError
 from probegen.sim.contact_parts import (

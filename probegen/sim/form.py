@@ -57,8 +57,8 @@ import numpy as np
 from probegen.cad import FaceRecord
 from probegen.cad.exact import FloatArray, Root, face_roots, nearest_on_surface
 from probegen.errors import ProbegenError, SpecError
+from probegen.files import Table, load_toml
 from probegen.geometry.frames import rotation_to_z
-from probegen.tomlread import Table, load_toml
 
 FORM_TYPES = ("cylinder", "cone", "sphere", "torus")
 """Face types a form error can perturb."""

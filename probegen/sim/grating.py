@@ -22,7 +22,7 @@ import numpy as np
 
 from probegen.errors import ProbegenError
 from probegen.machine.kinematics import PLANES, Machine
-from probegen.sim.macrob import Point, Settings, run_program
+from probegen.sim.macrob.machine import Point, Settings, run_program
 
 ON_PLANE = 1e-6
 """How close (mm) a move's end must be to the plate's plane to be a sampling stop."""

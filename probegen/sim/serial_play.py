@@ -14,7 +14,7 @@ from pathlib import Path
 from types import TracebackType
 
 from probegen.errors import ProbegenError
-from probegen.outputs import OutputError
+from probegen.files import OutputError
 
 
 class PtyLink:

@@ -38,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from probegen.alarms import SimAlarm
 from probegen.machine.kinematics import Machine, Topology
 from probegen.machine.probe_model import ProbeModel, tilted_probe_frame
+from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import ContactHit, PlacedPart
 
 Vec3 = tuple[float, float, float]
@@ -252,12 +252,12 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         work_offset: the G54 offset the control holds (Macro B only), mm.
     """
     if kind == "dmis":
-        from probegen.dmisrun.interpreter import run_dmis
+        from probegen.sim.cmm.interpreter import run_dmis
 
         dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
         return SimResult(dres.output, alarm, len(vm.touches))
-    from probegen.sim.macrob import Settings, run_program
+    from probegen.sim.macrob.machine import Settings, run_program
 
     variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
                  11000 + tool: 0.0, 10000 + tool: 0.0}
@@ -276,7 +276,7 @@ def control_state(result: SimResult) -> list[str]:
     """What a Macro B run left in the control, one line each: work offsets that are not
     zero (``G54 X300.7958 Y199.6344 Z-99.7000``), tool offsets (``T12 D wear 0.0150``),
     the G68 rotation; for ``probegen sim`` (docs/actions.md)."""
-    from probegen.sim.macrob_vars import EXTENDED, work_offset_slot
+    from probegen.sim.macrob.variables import EXTENDED, work_offset_slot
 
     sets: dict[int, dict[int, float]] = {}
     tools: list[str] = []

@@ -86,7 +86,7 @@ def run(program, ball: float, centre: np.ndarray) -> list[str]:  # type: ignore[
 def main() -> int:
     os.chdir(REPO)
     from probegen.planning import plan_program
-    from probegen.spec import load_spec
+    from probegen.spec.model import load_spec
 
     spec = load_spec("samples/sphere25/sphere_test.toml")
     planned = plan_program(spec, runtime_variables=True)

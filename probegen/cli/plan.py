@@ -1,0 +1,172 @@
+"""The planning commands of the command line: ``compile``, ``features``, ``plan`` and
+``sphere-points`` (registered by :func:`probegen.cli.app.build_parser`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from probegen.errors import ExitCode, ProbegenError
+from probegen.files import write_file
+
+
+def _compile(args: argparse.Namespace) -> int:
+    from probegen.cli.progress import Bar
+    from probegen.dialects import get_dialect
+    from probegen.planning import plan_program
+    from probegen.spec.model import load_spec
+
+    spec = with_calibration(load_spec(args.spec), args.calibration)
+    names = args.dialect or [spec.dialect]
+    outputs = []
+    for name in names:
+        dialect = get_dialect(name)
+        with Bar(f"planning for {name}", unit="steps") as bar:
+            planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
+                                   progress=bar)
+        text = dialect.generate(planned.program)
+        if args.output == "-":
+            sys.stdout.write(text)
+            continue
+        target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
+        write_file(target, text, f"the {name} program", encoding="ascii")
+        outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
+    from probegen.machine.calibration import UNCALIBRATED
+
+    cal = spec.machine.calibration
+    for target, planned, on_control in outputs:
+        print(f"wrote {target}")
+        if cal is not None and not on_control:
+            print("  probe: the calibration is not baked in (a CMM compensates with its own "
+                  "probe qualification)")
+        else:
+            print(f"  probe: {UNCALIBRATED if cal is None else cal.describe()}")
+        for p in planned.sphere_tests:
+            print(f"  {p.feature.id}: {len(p.directions)} points ({p.feature.layout}), "
+                  f"largest step {math.degrees(p.alpha):.2f} deg, retract {p.retract:.3f} mm "
+                  f"(safe minimum {p.min_retract:.3f} mm)")
+        _print_freeform(planned, "  ")
+        print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
+              f"clearance above the margin {planned.clearance.minimum:.3f} mm")
+    return ExitCode.OK
+
+
+def with_calibration(spec: Any, path: str | None) -> Any:
+    """``spec`` with the probe calibration of ``--calibration`` (it overrides the spec's
+    ``[machine] calibration``); unchanged without one."""
+    if not path:
+        return spec
+    from dataclasses import replace
+
+    from probegen.machine.calibration import for_stylus, load_calibration
+
+    cal = for_stylus(load_calibration(path), spec.machine.probe.ball_radius, "--calibration")
+    return replace(spec, machine=replace(spec.machine, calibration=cal))
+
+
+def _print_freeform(planned: Any, indent: str) -> None:
+    from probegen.planning.freeform_spec import summary_lines
+
+    for p in planned.freeform:
+        for line in summary_lines(p):
+            print(indent + line)
+
+
+def _target(output: str, stem: str, ext: str, count: int) -> Path:
+    """The program file ``-o output`` names: ``output`` itself when it is a file name (it has
+    a suffix, one program is written, and it is neither an existing folder nor ends in
+    ``/``), else ``output/<stem><ext>``."""
+    out = Path(output)
+    if out.suffix and count == 1 and not out.is_dir() and not output.endswith(("/", os.sep)):
+        return out
+    return out / f"{stem}{ext}"
+
+
+def _features(args: argparse.Namespace) -> int:
+    from probegen import cad
+
+    model = cad.load_step(args.model)
+    if args.revolved:
+        from probegen.cad.revolved import revolved_features, revolved_table
+
+        table = revolved_table(revolved_features(model))
+    else:
+        table = cad.features_table(model)
+    sys.stdout.write(table if table.endswith("\n") else table + "\n")
+    return ExitCode.OK
+
+
+def _plan(args: argparse.Namespace) -> int:
+    from probegen import ir
+    from probegen.planning import plan_program
+    from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
+    from probegen.spec.model import load_spec
+
+    notes: tuple[str, ...] = ()
+    if args.all_revolved:
+        from probegen.machine.profile import load_profile
+
+        if not args.machine:
+            raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
+        spec, notes = all_revolved_spec(Path(args.input), load_profile(args.machine))
+    else:
+        spec = load_spec(args.input)
+    planned = plan_program(spec, runtime_variables=True)
+    if planned.revolved or not planned.freeform:
+        sys.stdout.write(metrics_table(planned.revolved, spec.machine))
+    for p in planned.sphere_tests:
+        print(f"{p.feature.id}: sphere test (M1), {len(p.directions)} points: not compared")
+    _print_freeform(planned, "")
+    if planned.tour is not None:
+        toured = {r.spec.id for r in planned.revolved} | {f.spec.id for f in planned.freeform}
+        order = [n.feature.id for n in planned.program.body
+                 if isinstance(n, ir.FeatureBlock) and n.feature.id in toured]
+        print(f"order: {' '.join(order)}; travel (straight or "
+              f"at a local height where clear, else at z = {spec.clearance_z:.1f}): "
+              f"{planned.tour.length:.1f} mm (nearest neighbour "
+              f"{planned.tour.nearest_length:.1f} mm)")
+    if planned.figures is not None:
+        f = planned.figures
+        print(f"tour with travel: {f.plan.length:.1f} mm {f.plan.time:.1f} s; baseline "
+              f"{f.baseline.length:.1f} mm {f.baseline.time:.1f} s; lower bound "
+              f"{f.lower_bound.length:.1f} mm {f.lower_bound.time:.1f} s")
+    print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
+          f"clearance above the margin {planned.clearance.minimum:.3f} mm")
+    if args.all_revolved and not planned.revolved:
+        print(f"no revolved feature of {args.input} can be measured safely: the notes say why")
+    for r in planned.revolved:
+        for line in r.notes:
+            print(f"rerouted: {r.spec.id}: {line}")
+    for note in notes:
+        print(f"note: {note}")
+    return ExitCode.OK
+
+
+def _sphere_points(args: argparse.Namespace) -> int:
+    from probegen.geometry import sphere_layout as sl
+
+    if not 3 <= args.points <= 500 or not 0.0 < args.max_polar_angle <= 150.0:
+        raise ProbegenError(f"sphere-points: expected 3-500 points and a polar angle in "
+                            f"(0, 150] deg, found {args.points} and {args.max_polar_angle:g}")
+    pts = sl.layout(args.layout, args.points, args.max_polar_angle)
+    band = None if args.layout != "cap" else 2.0 * math.asin(
+        sl.uniformity(pts).min_distance / 2.0)
+    order = sl.zigzag_order(pts, band=band)
+    u = sl.uniformity(pts)
+    alpha = sl.max_step_angle(pts, order)
+    print(f"layout {args.layout}: {len(pts)} points")
+    print(f"min d / R     {u.min_distance:.3f}")
+    print(f"min d / max d {u.ratio:.3f}")
+    print(f"largest step  {math.degrees(alpha):.2f} deg (zigzag order)")
+    print(f"{'k':>3} {'theta':>8} {'phi':>8} {'x':>9} {'y':>9} {'z':>9}")
+    for k, i in enumerate(order, start=1):
+        x, y, z = pts[i]
+        theta = math.degrees(math.acos(max(-1.0, min(1.0, z))))
+        phi = math.degrees(math.atan2(y, x)) % 360.0
+        row = f"{k:>3} {theta:8.3f} {phi:8.3f} {x:9.5f} {y:9.5f} {z:9.5f}"
+        print(row.replace("-0.00000", " 0.00000"))
+    return ExitCode.OK

@@ -1,0 +1,172 @@
+"""The results commands of the command line: ``ingest``, ``capture``, ``qif`` and
+``report`` (registered by :func:`probegen.cli.app.build_parser`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from probegen.errors import ExitCode, ProbegenError, ResultsParseError
+from probegen.files import read_input, write_file
+
+if TYPE_CHECKING:
+    from probegen.evaluate.ingest import Ingested
+
+DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
+"""``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
+CMM's and a CMM's results), any other as a DPRNT log."""
+
+
+def add_log_options(p: argparse.ArgumentParser) -> None:
+    """``--run`` and ``--ignore-identity``: which run of a DPRNT log, and whether its
+    program identity is checked (``docs/results.md``, "Log identity")."""
+    p.add_argument("--run", type=int, metavar="N",
+                   help="use run N of a log holding several (1-based, in log order; "
+                        "default: the last complete run)")
+    p.add_argument("--ignore-identity", action="store_true",
+                   help="read a log whose program number or identity differs from the "
+                        "spec's (a warning goes into every output)")
+
+
+def _ingest(args: argparse.Namespace) -> int:
+    from probegen.evaluate.ingest import ingest, to_table, write_outputs
+    from probegen.machine.calibration import calibration_toml, check_date, load_calibration
+    from probegen.spec.model import load_spec
+
+    spec = load_spec(args.spec)
+    cal = load_calibration(args.calibration) if args.calibration else None
+    date = check_date(args.calibration_date, "--calibration-date") \
+        if args.calibration_date else ""
+    if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
+        from probegen.evaluate.ingest import ingest_dmis
+
+        result = ingest_dmis(args.log, spec, decision_rule=args.decision_rule)
+        if cal is not None:  # the CMM compensated its touches with its own probe data
+            result = replace(result, notes=(*result.notes, "--calibration is not applied "
+                                            "to a DMIS output: the CMM compensated its "
+                                            "touches itself"))
+    else:
+        result = ingest(args.log, spec, calibration=cal, with_path=True,
+                        decision_rule=args.decision_rule, run=args.run,
+                        ignore_identity=args.ignore_identity)
+    js, cs = write_outputs(result, Path(args.output))
+    sys.stdout.write(to_table(result))
+    for note in result.notes:
+        print(f"note: {note}")
+    for diag in result.log.diagnostics:
+        print(f"diagnostic: {diag}")
+    print(f"wrote {js} and {cs}")
+    if args.write_calibration:
+        if not result.results:
+            skipped = [f"{n.feature} ({n.reason})" for n in result.not_evaluated
+                       if n.kind == "sphere_test"]
+            raise ProbegenError("--write-calibration: expected an evaluated sphere test, "
+                                f"found {'none' if not skipped else 'only NOT EVALUATED '}"
+                                f"{', '.join(skipped)}")
+        refuse_incomplete_calibration(result)
+        written = result.results[0].calibration(str(args.log), date)
+        target = write_file(args.write_calibration, calibration_toml(written),
+                            "the probe calibration")
+        print(f"wrote the probe calibration {target} ({written.fingerprint}"
+              f"{'' if date else ', undated: give --calibration-date'})")
+    return verdict_code(result.status)
+
+
+def verdict_code(status: str) -> ExitCode:
+    """The exit code of a run's status (:mod:`probegen.errors`)."""
+    from probegen.evaluate.characteristics import NOT_EVALUATED, NOT_OK
+
+    return {NOT_OK: ExitCode.NOT_OK, NOT_EVALUATED: ExitCode.INCOMPLETE}.get(status,
+                                                                         ExitCode.OK)
+
+
+def refuse_incomplete_calibration(result: Ingested) -> None:
+    """Refuse to write a calibration from a sphere test that is not whole: a run cut
+    short, or a log read with its identity ignored (a sphere test with a touch missing
+    or removed as implausible is NOT EVALUATED and never reaches here).
+
+    Raises:
+        ProbegenError: naming why.
+    """
+    why = ("the log's run did not finish (no PGEND)" if not result.log.complete else
+           "the log's identity was not checked (--ignore-identity)"
+           if any(n.startswith("WARNING: identity") for n in result.notes) else "")
+    if why:
+        raise ProbegenError(f"--write-calibration: expected a complete sphere test of this "
+                            f"program, found that {why}; no calibration written")
+
+
+_PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
+
+
+def _capture(args: argparse.Namespace) -> int:
+    from probegen.results.capture import capture
+
+    print(f"capturing from {args.port} into {args.out} ({args.baud} baud, {args.bits}"
+          f"{args.parity}{args.stop_bits:g}, xon/xoff {'on' if args.xonxoff else 'off'}); "
+          "start the program now, Ctrl-C stops", file=sys.stderr)
+    from probegen.cli.progress import Bar
+
+    with Bar("capturing", unit="bytes") as bar:
+        res = capture(args.port, args.out, baudrate=args.baud, bytesize=args.bits,
+                      parity=_PARITY[args.parity], stopbits=args.stop_bits,
+                      xonxoff=args.xonxoff, timeout_s=args.timeout, append=args.append,
+                      progress=lambda _total, chunk: bar(len(chunk)))
+    why = {"end-marker": "the program's end marker arrived",
+           "timeout": f"nothing arrived for {args.timeout:g} s",
+           "interrupted": "stopped by the user",
+           "disconnected": f"the port went away ({res.detail})"}[res.reason]
+    print(f"capture ended: {why}; {res.bytes} bytes kept in {res.path}")
+    return ExitCode.OK if res.reason == "end-marker" else ExitCode.CAPTURE_INCOMPLETE
+
+
+def _qif(args: argparse.Namespace) -> int:
+    from probegen.qif.export import dmis_output_to_qif, ingested_to_qif, write_qif
+    from probegen.sim.vm import program_kind
+
+    if program_kind(args.input) == "dmis":
+        from probegen.qif.dmis_output import read_dmis_tolerances
+        from probegen.results import read_dmis_output
+
+        limits = None
+        if args.program:
+            text = read_input(args.program, "the DMIS program")
+            limits = read_dmis_tolerances(text, source=args.program)
+        out = read_dmis_output(args.input, strict=args.strict)
+        if not out.features and not out.tolerances:
+            unread = len(out.diagnostics)
+            raise ResultsParseError(
+                f"{args.input}: expected DMIS output with feature or tolerance actuals (FA, "
+                f"TA), found none ({unread} statement{'s' if unread != 1 else ''} could not "
+                "be read)", out.diagnostics)
+        export = dmis_output_to_qif(out, tolerances=limits)
+        text, notes = export.text, export.notes
+    else:
+        from probegen.evaluate.ingest import ingest
+        from probegen.machine.calibration import load_calibration
+        from probegen.spec.model import load_spec
+
+        if not args.spec:
+            raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
+        spec = load_spec(args.spec)
+        cal = load_calibration(args.calibration) if args.calibration else None
+        ingested = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
+                          run=args.run, ignore_identity=args.ignore_identity)
+        text, notes = ingested_to_qif(ingested, spec=spec), ingested.notes
+        print(f"probe: {ingested.calibration_text}")
+    path = write_qif(args.output, text, schema=args.schema, validate=args.validate)
+    for note in notes:
+        print(f"note: {note}")
+    print(f"wrote {path}{' (valid against the QIF 3 schema)' if args.validate else ''}")
+    return ExitCode.OK
+
+
+def _report(args: argparse.Namespace) -> int:
+    from probegen.report import write_report
+
+    out = write_report(args.results, args.output, title=args.title)
+    print(f"wrote the report {out}")
+    return ExitCode.OK

@@ -1,0 +1,1 @@
+"""Returned points against the spec: compensation, fits, characteristics, verdicts, ingest."""

@@ -1,0 +1,810 @@
+"""From what the machine returned to evaluated features: ``probegen ingest``.
+
+Reads a DPRNT log (as captured: the raw bytes on disk are never rewritten), matches each
+measuring touch to its planned point by feature id and point index, compensates the ball
+centres along the planned normals, fits and evaluates each feature, and writes
+``results.json`` and ``results.csv``.
+
+Matching: the spec is planned again (its program without the collision check), so
+touch ``k`` of feature ``F`` is the plan's ``k``-th point of ``F``.  Before matching, the
+log is checked against that plan (:mod:`probegen.results.logcheck`): the run used (the last
+complete one unless ``run`` says otherwise), the program number and identity its
+``PGSTART`` prints, unknown and duplicate point ids, and touches that cannot be their
+planned move (treated as missing).  A resumed program (a run cut short, then a new
+``PGSTART``) re-prints some points: the runs are read together and a repeated point counts
+once, the last one read; the same point twice within one run is refused.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from probegen.errors import ProbegenError
+from probegen.evaluate.actions import Decision, decisions
+from probegen.evaluate.characteristics import (
+    NOT_EVALUATED,
+    Evaluated,
+    NotEvaluated,
+    SphereTestResult,
+    accepted,
+    evaluate_sphere_test,
+    run_status,
+    status_of,
+)
+from probegen.evaluate.freeform import (
+    FreeformResult,
+    NominalPoint,
+    Touches,
+    complete_guides,
+    evaluate_freeform,
+)
+from probegen.evaluate.planar import PlanarResult, evaluate_planar
+from probegen.evaluate.revolved import MIN_SECTIONS, Nominal, RevolvedResult, evaluate_revolved
+from probegen.geometry.fits_solver import vec3
+from probegen.geometry.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
+from probegen.machine.calibration import ProbeCalibration, calibration_state, compensate, for_stylus
+from probegen.results import DmisOutput, DprntLog, read_dmis_output
+from probegen.results.dprnt import log_lines, parse_dprnt, read_raw
+from probegen.results.logcheck import check_log, ranges
+from probegen.spec.actions import PlanarSpec
+from probegen.spec.model import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec, SphereTest
+
+Vec3 = tuple[float, float, float]
+
+MIN_POINTS = 5
+"""Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
+REVOLVED_MIN_POINTS = {"circle": 4, "cylinder": 6, "cone": 7, "sphere": 5, "torus": 8}
+"""Fewest touches each revolved kind is evaluated from: one more than its fit's
+parameters (circle 3 in its plane, cylinder 5, cone 6, sphere 4, torus 7), so at least
+one touch checks the form."""
+
+
+@dataclass(frozen=True, slots=True)
+class Ingested:
+    """Everything ``ingest`` found.
+
+    Attributes:
+        source: the log file.
+        log: the parsed log (with its diagnostics).
+        results: one evaluated result per sphere test with all its touches.
+        notes: problems found while matching (missing touches, alarms in the log).
+        path: the planned stylus path at nominal, as (feature, kind, start, end) segments
+            (kind: rapid, protected, or touch ...), for the report.
+        revolved: one evaluated result per revolved feature (method M2) with all its
+            touches.
+        decisions: the in-process decisions' values, offline and as the machine
+            printed them (``ingest_actions``).
+        freeform: one evaluated result per free-form feature with all its touches.
+        planar: one evaluated result per line and plane with all its touches.
+        not_evaluated: every other spec feature: too few or no-contact touches, a
+            failed fit, a run cut short before it, touches removed as implausible
+            (``NOT EVALUATED``).
+        rule: the ISO 14253-1 decision rule of the verdicts (``simple``, ``guard_band``).
+        budget: the stated uncertainty contributions the characteristics' ``u`` used.
+        calibration: the probe calibration the results were compensated with, or None
+            (the nominal ball radius).
+    """
+
+    source: str
+    log: DprntLog
+    results: tuple[SphereTestResult, ...]
+    notes: tuple[str, ...]
+    path: tuple[tuple[str, str, Vec3, Vec3], ...] = ()
+    revolved: tuple[RevolvedResult, ...] = ()
+    decisions: tuple[Decision, ...] = ()
+    freeform: tuple[FreeformResult, ...] = ()
+    planar: tuple[PlanarResult, ...] = ()
+    not_evaluated: tuple[NotEvaluated, ...] = ()
+    rule: str = "simple"
+    budget: Budget = Budget()
+    calibration: ProbeCalibration | None = None
+
+    @property
+    def evaluated(self) -> tuple[Evaluated, ...]:
+        """Every completely evaluated feature, by kind (sphere tests, revolved,
+        free-form, planar), each in spec order."""
+        return (*self.results, *self.revolved, *self.freeform, *self.planar)
+
+    @property
+    def status(self) -> str:
+        """The run's status (:func:`probegen.evaluate.characteristics.run_status`)."""
+        return run_status((accepted(r.characteristics, self.rule) for r in self.evaluated),
+                          not_evaluated=bool(self.not_evaluated), complete=self.log.complete)
+
+    @property
+    def incomplete(self) -> tuple[str, ...]:
+        """Ids of the features NOT EVALUATED (missing, no-contact or implausible touches,
+        a run cut short, a failed fit): a calibration is never written from such a
+        sphere test."""
+        return tuple(n.feature for n in self.not_evaluated)
+
+    @property
+    def uncertainty_notes(self) -> tuple[str, ...]:
+        """What the uncertainties leave out: unstated contributions, fits with few
+        degrees of freedom."""
+        fits = [(r.feature, "sphere_test", len(r.points)) for r in self.results]
+        fits += [(r.feature, r.kind, len(r.points)) for r in self.revolved]
+        few = [few_dof_note(f, k, n, self.budget) for f, k, n in fits]
+        return (*self.budget.notes(), *(n for n in few if n is not None))
+
+    @property
+    def ok(self) -> bool:
+        """No evaluated feature fails its verdict under ``rule``."""
+        return not any(accepted(r.characteristics, self.rule) is False
+                       for r in self.evaluated)
+
+    @property
+    def calibration_text(self) -> str:
+        """What every output says about the calibration used."""
+        return str(calibration_state(self.calibration)["state"])
+
+
+def calibration_notes(log: DprntLog, calibration: ProbeCalibration | None) -> list[str]:
+    """Warnings when the log's ``PGCAL`` (the calibration its program was compiled with)
+    is not the calibration the results use."""
+    marks = sorted({m.fingerprint for m in log.calibrations})
+    if not marks:
+        if calibration is None:
+            return []
+        return [f"the program was compiled without a probe calibration (no PGCAL line): "
+                f"the values it computed on the control used the nominal ball radius, "
+                f"the results use calibration {calibration.fingerprint}"]
+    if calibration is None:
+        return [f"the program was compiled with probe calibration {', '.join(marks)} "
+                f"(PGCAL) but none was given (--calibration): the results use the "
+                f"nominal ball radius"]
+    other = [m for m in marks if m != calibration.fingerprint]
+    if other:
+        return [f"the program was compiled with probe calibration {', '.join(other)} "
+                f"(PGCAL), the results use {calibration.fingerprint} "
+                f"({calibration.source or 'unknown source'})"]
+    return []
+
+
+def budget_of(spec: Spec, calibration: ProbeCalibration | None) -> Budget:
+    """The stated uncertainty contributions: the profile's and the calibration's."""
+    stated = spec.machine.uncertainty
+    return Budget(0.0 if calibration is None else calibration.u_radius, stated.machine,
+                  stated.probe)
+
+
+Outcome = Evaluated | NotEvaluated
+
+
+class _Gaps:
+    """Which planned touches of a feature are missing or reported no contact.
+
+    A no-contact touch is an ``ERR NOTOUCH`` record not followed by a touch of the
+    same point (a resumed program that measured it again)."""
+
+    def __init__(self, log: DprntLog, touches: Touches) -> None:
+        self.touches = touches
+        self.notouch = log.no_contact()
+
+    def reason(self, feature: str, indices: Sequence[int], *, missing_too: bool = True
+               ) -> str:
+        """Why the feature is incomplete ("" when every touch is there); only the
+        no-contact touches unless ``missing_too``."""
+        blind = [k for k in indices if (feature, k) in self.notouch]
+        missing = [k for k in indices if (feature, k) not in self.touches and k not in blind]
+        why = [f"no contact at point {k} (ERR NOTOUCH, line {self.notouch[(feature, k)]})"
+               for k in blind]
+        if missing and missing_too:
+            why.append(f"no touch for point{'s' if len(missing) > 1 else ''} "
+                       f"{ranges(missing)}")
+        return "; ".join(why)
+
+
+def ingest(log_path: str | Path, spec: Spec, *,
+           calibration: ProbeCalibration | None = None, with_path: bool = False,
+           decision_rule: str | None = None, run: int | None = None,
+           ignore_identity: bool = False) -> Ingested:
+    """Read a DPRNT log and evaluate every feature of ``spec``: completely, or as
+    ``NOT EVALUATED`` with the reason.
+
+    The log is first checked against the program (:func:`probegen.results.logcheck.check_log`:
+    program number and identity, which run, unknown and duplicate point ids, touches
+    too far from their planned move); ``run`` (1-based) and ``ignore_identity`` are
+    passed to it.  ``with_path`` also runs the collision check of the whole program
+    again to record the nominal stylus path for the report.  ``decision_rule``
+    overrides the spec's ``[evaluation] decision_rule``.  ``calibration`` defaults to
+    the spec's ``[machine] calibration``.
+
+    Raises:
+        ProbegenError: the log cannot be read, belongs to another program, names points
+            the plan does not have, or holds no touch of any feature of the spec and no
+            alarm of one (a run stopped at its first touch is NOT EVALUATED).
+    """
+    from probegen.planning import plan_program
+    from probegen.planning.identity import planned_touches
+
+    calibration = for_stylus(calibration or spec.machine.calibration,
+                             spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
+    planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
+    data = read_raw(log_path)  # once: parsed here, quoted in diagnostics by check_log
+    checked = check_log(parse_dprnt(data, source=str(log_path)), program=spec.program_number,
+                        identity=planned.program.setup.identity,
+                        touches=planned_touches(planned.program, planned.sphere_tests),
+                        run=run, ignore_identity=ignore_identity,
+                        lines=log_lines(data))
+    log = checked.log
+    notes = list(checked.notes) + calibration_notes(log, calibration)
+    notes += [f"the program stopped: ERR {e.code} {e.feature} {e.index} (line {e.line})"
+              for e in log.errors]
+    if not log.complete:
+        notes.append("the log has no PGEND line: the program did not finish")
+    touches = {(t.feature, t.index): t.xyz for t in log.latest_touches() if t.kind == "PT"}
+    ids = {f.id for f in spec.features}
+    if not any(f in ids for f, _ in touches) and not any(e.feature in ids
+                                                          for e in log.errors):
+        raise ProbegenError(f"{log_path}: expected measuring touches (PT lines) of the "
+                            f"spec's features, found none usable; " + "; ".join(notes))
+    gaps = _Gaps(log, touches)
+    budget = budget_of(spec, calibration)
+    outcomes: list[Outcome] = []
+    for feature in spec.features:
+        if isinstance(feature, RevolvedSpec):
+            outcomes.append(_revolved(feature, spec, touches, notes, gaps, budget,
+                                     calibration))
+        elif isinstance(feature, FreeformSpec):
+            outcomes.append(ingest_freeform(feature, spec, touches, notes, calibration,
+                                            gaps))
+        elif isinstance(feature, PlanarSpec):
+            outcomes.append(_planar(feature, spec, touches, gaps, calibration))
+        else:
+            outcomes.append(_sphere_test(feature, spec, touches, notes, gaps, calibration,
+                                         budget))
+    path = tuple((s.feature, s.kind, s.start, s.end)
+                 for s in planned.clearance.segments) if with_path else ()
+    return Ingested(str(log_path), log, _only(outcomes, SphereTestResult), tuple(notes),
+                    path, _only(outcomes, RevolvedResult), decisions(spec, log, calibration),
+                    _only(outcomes, FreeformResult), _only(outcomes, PlanarResult),
+                    _only(outcomes, NotEvaluated), decision_rule or spec.decision_rule, budget,
+                    calibration)
+
+
+T = TypeVar("T")
+
+
+def _only(outcomes: Sequence[object], kind: type[T]) -> tuple[T, ...]:
+    return tuple(o for o in outcomes if isinstance(o, kind))
+
+
+def _judge(feature: str, kind: str, reason: str,
+           names: Sequence[tuple[str, float | None, float | None]],
+           evaluate: Callable[[], Evaluated] | None) -> Outcome:
+    """The outcome of one feature: ``evaluate()`` when nothing is missing, else NOT
+    EVALUATED for ``reason`` (with the fit of the touches there are, when ``evaluate``
+    is given and succeeds, for information).  A failed fit is NOT EVALUATED too."""
+    def not_evaluated(why: str, partial: Evaluated | None) -> NotEvaluated:
+        return NotEvaluated(feature, kind, why, tuple(n for n, _, _ in names),
+                            tuple((lo, hi) for _, lo, hi in names), partial)
+
+    if evaluate is None:
+        return not_evaluated(reason, None)
+    try:
+        result = evaluate()
+    except ProbegenError as exc:
+        return not_evaluated("; ".join(w for w in (reason, f"the fit failed: {exc}") if w),
+                             None)
+    return not_evaluated(reason, result) if reason else result
+
+
+def _limits(*pairs: tuple[str, tuple[float | None, float | None] | None]
+            ) -> list[tuple[str, float | None, float | None]]:
+    """The toleranced characteristics among ``(name, limits or None)``."""
+    return [(n, lim[0], lim[1]) for n, lim in pairs if lim is not None]
+
+
+def _sym(limit: float | None) -> tuple[float | None, float | None] | None:
+    return None if limit is None else (-limit, limit)
+
+
+def _upper(limit: float | None) -> tuple[float | None, float | None] | None:
+    return None if limit is None else (None, limit)
+
+
+def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[str],
+                 gaps: _Gaps, calibration: ProbeCalibration | None, budget: Budget
+                 ) -> Outcome:
+    """Evaluate a sphere test (method M1) from its touches."""
+    from probegen.planning.sphere_test import plan_points, resolve_sphere
+
+    sphere = resolve_sphere(feature, spec.model)
+    plan = plan_points(feature, sphere, spec.machine)
+    planned = range(1, len(plan.directions) + 1)
+    found = [k for k in planned if (feature.id, k) in touches]
+    missing = sorted(set(planned) - set(found))
+    if missing:
+        notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
+    tol = feature.tolerance
+    names = _limits(("POS", _upper(tol.position)), ("D", _sym(tol.size)),
+                    ("P_FTU", _upper(tol.form)), ("P_STU", _sym(tol.size)))
+    reason = gaps.reason(feature.id, planned)
+
+    def evaluate() -> SphereTestResult:
+        centres = np.array([touches[(feature.id, k)] for k in found])
+        normals = np.array([plan.directions[k - 1] for k in found])
+        # One radius, not the map: the sphere test measures the map (P_FTU, the radii
+        # by direction); compensating it with the map would hide what it measures.
+        r = spec.machine.probe.ball_radius if calibration is None else \
+            calibration.effective_radius
+        return evaluate_sphere_test(
+            feature.id, compensate(centres, normals, r), normals,
+            nominal_centre=sphere.centre, calibrated_diameter=sphere.diameter,
+            ball_radius=r, nominal_radius=spec.machine.probe.ball_radius,
+            form=tol.form, size=tol.size, position=tol.position, budget=budget)
+
+    if len(found) < MIN_POINTS:
+        notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "
+                     f"(at least {MIN_POINTS} needed)")
+        return _judge(feature.id, "sphere_test", reason, names, None)
+    return _judge(feature.id, "sphere_test", reason, names, evaluate)
+
+
+def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
+            calibration: ProbeCalibration | None) -> Outcome:
+    """Evaluate a line or plane from its touches (``evaluate_planar``)."""
+    from probegen.planning.actions import planar_fit
+    from probegen.planning.planar import plan_planar
+
+    machine = dataclasses.replace(spec.machine, calibration=calibration)
+    check = planar_fit(plan_planar(feature, spec.model, machine), machine)
+    tol = feature.tolerance
+    names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)),
+                    ("FORM", _upper(tol.form)))
+    planned = range(1, len(feature.contacts) + 1)
+    reason = gaps.reason(feature.id, planned)
+    balls = {k: touches[(feature.id, k)] for k in planned if (feature.id, k) in touches}
+    return _judge(feature.id, feature.kind, reason, names, None if reason else (
+        lambda: evaluate_planar(check, balls, radius=calibration, tolerance=tol)))
+
+
+def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
+                    calibration: ProbeCalibration | None = None,
+                    gaps: _Gaps | None = None) -> Outcome:
+    """Evaluate one free-form feature from ball centres by (feature, touch index).
+
+    The feature is planned again (with its collision checks) for the theoretical contact
+    points and normals; a guide point missing a touch (or, with ``gaps``, one with a
+    no-contact touch) makes the feature NOT EVALUATED, with the other guide points'
+    deviations for information.
+    """
+    from probegen.planning import make_setup
+    from probegen.planning.freeform_spec import plan_freeform
+
+    plan = plan_freeform(feature, spec.model, spec.machine, make_setup(spec))
+    nominal = [NominalPoint(t.guide, t.contact, t.normal) for t in plan.touches
+               if t.role == 0]
+    full, missing = complete_guides(feature.id, feature.method, nominal, touches)
+    lim = feature.deviation
+    names = [] if lim is None else [(f"E{p.guide}", lim[0], lim[1]) for p in nominal]
+    reason = "" if gaps is None else gaps.reason(
+        feature.id, [t.index for t in plan.touches], missing_too=False)
+    if missing:
+        notes.append(f"feature {feature.id}: guide points {ranges(missing)} lack touches, "
+                     "not evaluated")
+        reason = "; ".join(w for w in (reason, f"guide points {ranges(missing)} lack "
+                                               "touches") if w)
+    if not full:
+        notes.append(f"feature {feature.id}: not evaluated, no guide point has all its "
+                     "touches")
+        return _judge(feature.id, "freeform", reason, names, None)
+    r = spec.machine.probe.ball_radius if calibration is None else calibration
+    return _judge(feature.id, "freeform", reason, names, lambda: evaluate_freeform(
+        feature.id, feature.method, full, touches, direction=feature.direction, radius=r,
+        deviation=feature.deviation, budget=budget_of(spec, calibration)))
+
+
+def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
+    """Ball centres of the free-form touches in a DMIS output file, by (feature, index).
+
+    Touch ``k`` of feature ``F`` is the point actual ``FA(F_k)``; the CMM reports the
+    contact compensated along the PTMEAS vector, so the ball centre is the point plus
+    the ball radius along that vector.
+    """
+    ids = {f.id for f in spec.features if isinstance(f, FreeformSpec)}
+    r = spec.machine.probe.ball_radius
+    out: dict[tuple[str, int], Vec3] = {}
+    for fa in output.features:
+        name, _, index = fa.name.rpartition("_")
+        if fa.type == "POINT" and name in ids and index.isdigit() and fa.direction:
+            p, n = np.array(fa.position), np.array(fa.direction)
+            x, y, z = (p + r * n).tolist()
+            out[(name, int(index))] = (x, y, z)
+    return out
+
+
+def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = None) -> Ingested:
+    """``probegen ingest`` of a DMIS output file: the free-form features of ``spec``
+    (the CMM reports the other kinds itself; ``probegen qif`` exports them).
+
+    ``log`` is an empty DPRNT log that carries the file's diagnostics; ``complete`` is
+    whether the output holds at least one feature actual.
+
+    Raises:
+        ProbegenError: the file cannot be read, or holds no free-form touches of the spec.
+    """
+    output = read_dmis_output(path)
+    outcomes, notes = ingest_dmis_freeform(output, spec)
+    if not any(isinstance(o, FreeformResult) or (
+            isinstance(o, NotEvaluated) and o.partial is not None) for o in outcomes):
+        raise ProbegenError(f"{path}: expected point actuals FA(<id>_<k>) of the spec's "
+                            "free-form features, found none usable; " + "; ".join(notes))
+    log = DprntLog(str(path), None, (), (), (), bool(output.features), 0, output.diagnostics)
+    return Ingested(str(path), log, (), notes, freeform=_only(outcomes, FreeformResult),
+                    not_evaluated=_only(outcomes, NotEvaluated),
+                    rule=decision_rule or spec.decision_rule, budget=budget_of(spec, None))
+
+
+def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Outcome, ...],
+                                                                   tuple[str, ...]]:
+    """Evaluate the free-form features of ``spec`` from a DMIS output file (the CMM
+    evaluates the other kinds itself); returns the outcomes and the notes."""
+    touches = dmis_touches(output, spec)
+    notes: list[str] = []
+    found = [ingest_freeform(f, spec, touches, notes) for f in spec.features
+             if isinstance(f, FreeformSpec)]
+    return tuple(found), tuple(notes)
+
+
+def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[str],
+              gaps: _Gaps, budget: Budget, calibration: ProbeCalibration | None = None
+              ) -> Outcome:
+    """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
+    without contact, too few to fit, or a failed fit)."""
+    from probegen.planning.revolved_spec import plan_revolved
+
+    plan = plan_revolved(feature, spec.model, spec.machine, spec.clearance_z)
+    indices = sorted(plan.normals)
+    found = [k for k in indices if (feature.id, k) in touches]
+    missing = sorted(set(indices) - set(found))
+    if missing:
+        notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
+    nominal = nominal_of(plan)
+    names = _revolved_names(feature, len(nominal.sections))
+    reason = gaps.reason(feature.id, indices)
+    least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
+    which = [plan.section_of_touch[k] for k in found]
+    if len(found) < least or len(set(which)) < sections:
+        notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches in "
+                     f"{len(set(which))} sections (at least {least} needed"
+                     f"{f', in {sections} sections' if sections > 1 else ''})")
+        return _judge(feature.id, feature.kind, reason, names, None)
+    outcome = _judge(feature.id, feature.kind, reason, names, lambda: evaluate_revolved(
+        feature.id, nominal, [touches[(feature.id, k)] for k in found], which,
+        ball_radius=spec.machine.probe.ball_radius if calibration is None else calibration,
+        limits=feature.tolerance, budget=budget))
+    if isinstance(outcome, NotEvaluated) and outcome.partial is None:
+        notes.append(f"feature {feature.id}: not evaluated: {outcome.reason}")
+    found_fit = outcome.partial if isinstance(outcome, NotEvaluated) else outcome
+    if isinstance(found_fit, RevolvedResult):
+        notes.extend(found_fit.notes)  # other solutions the touches admit
+    return outcome
+
+
+def _revolved_names(feature: RevolvedSpec, sections: int
+                    ) -> list[tuple[str, float | None, float | None]]:
+    """The toleranced characteristics of a revolved feature, in the order
+    ``evaluate_revolved`` gives them."""
+    t, kind = feature.tolerance, feature.kind
+    per_section: list[tuple[str, tuple[float | None, float | None] | None]] = []
+    if kind in ("cylinder", "cone"):
+        for j in range(1, sections + 1):
+            per_section += [(f"D_S{j}", t.diameter), (f"RON_S{j}", _upper(t.roundness))]
+    return _limits(("POS", _upper(t.position)),
+                   ("D", None if kind == "cone" else t.diameter),
+                   ("ANGLE", t.angle if kind == "cone" else None), *per_section,
+                   ("TAPER", _sym(t.taper) if kind == "cylinder" else None),
+                   ("FORM", _upper(t.form)))
+
+
+def nominal_of(plan: Any) -> Nominal:
+    """The nominal feature of a ``planning.revolved_spec.RevolvedPlan`` for
+    ``evaluate_revolved``."""
+    d, kind = plan.definition, plan.spec.kind
+    sections = tuple((vec3(np.asarray(s.centre, dtype=np.float64)), 2.0 * float(s.radius))
+                     for s in plan.resolved.sections)
+    axis = vec3(np.asarray(getattr(d, "axis", plan.resolved.feature.axis), dtype=np.float64))
+    inside = bool(getattr(d, "concave", d.inner))
+    if kind == "cone":
+        return Nominal(kind, d.apex, axis, 0.0, inside, sections, half_angle=d.half_angle)
+    if kind == "torus":
+        return Nominal(kind, d.centre, axis, d.minor_diameter, inside, sections,
+                       major_diameter=d.major_diameter)
+    return Nominal(kind, d.centre, axis, d.diameter, inside, sections)
+
+
+def _f(x: float) -> float:
+    return float(f"{x:.7f}") + 0.0
+
+
+def to_json(ing: Ingested) -> str:
+    """``results.json``: repeatable text (fixed rounding to 1e-7 mm).
+
+    ``status`` (run, feature, characteristic) is one of ``OK``, ``NOT OK``, ``NOT
+    EVALUATED``, ``-`` (:mod:`probegen.evaluate.characteristics`); ``ok`` is kept beside
+    it (None for what is not toleranced or not evaluated).  The completely evaluated features come
+    first, then the NOT EVALUATED ones with their ``reason``."""
+    doc: dict[str, Any] = {
+        "source": ing.source,
+        "program": ing.log.program,
+        "complete": ing.log.complete,
+        "status": ing.status,
+        "calibration": calibration_state(ing.calibration),
+        "notes": list(ing.notes),
+        "uncertainty": uncertainty_json(ing.budget, ing.rule, ing.uncertainty_notes),
+        "diagnostics": [str(d) for d in ing.log.diagnostics],
+        "features": [_evaluated_json(r, ing.rule) for r in ing.evaluated]
+        + [_not_evaluated_json(n, ing.rule) for n in ing.not_evaluated],
+        "path": [{"feature": f, "kind": k, "start": [_f(v) for v in a],
+                  "end": [_f(v) for v in b]} for f, k, a, b in ing.path],
+    }
+    if ing.decisions:  # features with in-process decisions (docs/actions.md)
+        doc["decisions"] = [{"feature": d.feature, "key": d.key, "agrees": d.agrees,
+                             "offline": None if d.offline is None else _f(d.offline),
+                             "machine": None if d.machine is None else _f(d.machine),
+                             "limit": _f(d.limit)}
+                            for d in ing.decisions]
+    return json.dumps(doc, indent=2) + "\n"
+
+
+def _evaluated_json(r: Evaluated, rule: str) -> dict[str, Any]:
+    """One evaluated feature of any kind, with its ``status`` under ``rule``."""
+    if isinstance(r, SphereTestResult):
+        doc = _feature_json(r, rule)
+    elif isinstance(r, RevolvedResult):
+        doc = _revolved_json(r, rule)
+    elif isinstance(r, FreeformResult):
+        doc = freeform_json(r, rule)
+    else:
+        assert isinstance(r, PlanarResult)
+        doc = _planar_json(r, rule)
+    return _after_ok(doc, status=status_of(accepted(r.characteristics, rule)))
+
+
+def _after_ok(doc: dict[str, Any], **keys: Any) -> dict[str, Any]:
+    """``doc`` with ``keys`` set right after its ``ok`` key (replaced where present)."""
+    out: dict[str, Any] = {}
+    for k, v in doc.items():
+        if k not in keys:
+            out[k] = v
+        if k == "ok":
+            out.update(keys)
+    return out
+
+
+def _not_evaluated_json(n: NotEvaluated, rule: str) -> dict[str, Any]:
+    """A NOT EVALUATED feature: the partial fit's keys when there is one (for
+    information), every characteristic's ``ok`` None and its status NOT EVALUATED
+    (``-`` where not toleranced)."""
+    doc: dict[str, Any] = {"id": n.feature, "kind": n.kind, "ok": None, "n": 0,
+                           "characteristics": [], "points": [], "directions": [],
+                           "residuals": []}
+    if n.partial is not None:
+        doc = _evaluated_json(n.partial, rule)
+    doc["characteristics"] = [
+        {"name": name, "measured": _opt_f(measured), "nominal": _opt_f(nominal),
+         "deviation": _opt_f(deviation), "lower": _opt_f(lower), "upper": _opt_f(upper),
+         "ok": None, "status": status, "u": _opt_f(u), "U": _opt_f(big_u), "decision": None}
+        for name, measured, nominal, deviation, lower, upper, status, u, big_u, _, _
+        in _rows_of(n, rule)]
+    return _after_ok({**doc, "ok": None}, status=NOT_EVALUATED, reason=n.reason)
+
+
+def uncertainty_json(budget: Budget, rule: str, notes: Sequence[str]) -> dict[str, Any]:
+    """The ``uncertainty`` object of ``results.json``: coverage factor, decision rule and
+    the stated contributions (None: not stated), with what they leave out."""
+    return {"k": COVERAGE_FACTOR, "decision_rule": rule, "u_radius": _f(budget.radius),
+            "machine": None if budget.machine is None else _f(budget.machine),
+            "probe": None if budget.probe is None else _f(budget.probe),
+            "notes": list(notes)}
+
+
+def _opt_f(x: float | None) -> float | None:
+    return None if x is None else _f(x)
+
+
+Row = tuple[str, float | None, float | None, float | None, float | None, float | None, str,
+            float | None, float | None, str | None, str]
+"""A characteristic as the outputs list it: name, measured, nominal, deviation, lower,
+upper, status, u, U, decision (ISO 14253-1), method (of a form value, else "")."""
+
+
+def _rows_of(r: Evaluated | NotEvaluated, rule: str) -> list[Row]:
+    """The characteristic rows of one feature (statuses under ``rule``); a NOT EVALUATED
+    feature: its partial fit's (toleranced ones NOT EVALUATED), then its other
+    toleranced characteristics without values."""
+    if not isinstance(r, NotEvaluated):
+        return [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
+                 status_of(c.accepted(rule)), c.u, c.U, c.decision, c.method)
+                for c in r.characteristics]
+    chars = () if r.partial is None else r.partial.characteristics
+    rows: list[Row] = [(c.name, c.measured, c.nominal, c.deviation, c.lower, c.upper,
+                        "-" if c.ok is None else NOT_EVALUATED, c.u, c.U, None, c.method)
+                       for c in chars]
+    shown = {c.name for c in chars}
+    rows += [(name, None, None, None, lo, hi, NOT_EVALUATED, None, None, None, "")
+             for name, (lo, hi) in zip(r.characteristics, r.limits, strict=True)
+             if name not in shown]
+    return rows
+
+
+def _head(r: Evaluated, kind: str, rule: str) -> dict[str, Any]:
+    """The keys every feature's JSON starts with: id, kind, the verdict, the touches."""
+    return {"id": r.feature, "kind": kind, "ok": accepted(r.characteristics, rule),
+            "n": len(r.points)}
+
+
+def _planar_json(r: PlanarResult, rule: str) -> dict[str, Any]:
+    return {
+        **_head(r, r.kind, rule),
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
+    }
+
+
+def _measured_json(characteristics: Any, points: Any, directions: Any,
+                   residuals: Any, rule: str) -> dict[str, Any]:
+    """The part of a feature's JSON every kind shares: checks (``ok`` and ``status``
+    are the verdict under ``rule``), points, normals, residuals."""
+    return {
+        "characteristics": [
+            {"name": c.name, "measured": _f(c.measured), "nominal": _f(c.nominal),
+             "deviation": _f(c.deviation), "lower": _opt_f(c.lower),
+             "upper": _opt_f(c.upper), "ok": c.accepted(rule),
+             "status": status_of(c.accepted(rule)), "u": _opt_f(c.u), "U": _opt_f(c.U),
+             "decision": c.decision, **({"method": c.method} if c.method else {})}
+            for c in characteristics
+        ],
+        "points": [[_f(v) for v in p] for p in points],
+        "directions": [[_f(v) for v in d] for d in directions],
+        "residuals": [_f(v) for v in residuals],
+    }
+
+
+def _feature_json(r: SphereTestResult, rule: str) -> dict[str, Any]:
+    return {
+        **_head(r, "sphere_test", rule),
+        "centre": [_f(v) for v in r.fit.centre],
+        "diameter": _f(2.0 * r.fit.radius),
+        "p_ftu": _f(r.p_ftu),
+        "p_stu": _f(r.p_stu),
+        "effective_radius": _f(r.effective_radius),
+        **_measured_json(r.characteristics, r.points, r.directions, r.fit.residuals, rule),
+    }
+
+
+def _revolved_json(r: RevolvedResult, rule: str) -> dict[str, Any]:
+    return {
+        **_head(r, r.kind, rule),
+        "centre": [_f(v) for v in r.centre],
+        "axis": [_f(v) for v in r.axis],
+        "diameter": _f(r.diameter),
+        "form": _f(r.form),
+        **({} if r.half_angle is None else {"half_angle_deg": _f(math.degrees(r.half_angle))}),
+        **({} if r.apex is None else {"apex": [_f(v) for v in r.apex]}),
+        **({} if r.major_diameter is None else {"major_diameter": _f(r.major_diameter)}),
+        # how well the touches determine the fit (geometry.fits_conditioning), 4 digits
+        **({} if r.condition is None or not math.isfinite(r.condition)
+           else {"condition": float(f"{r.condition:.4g}")}),
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
+    }
+
+
+def freeform_json(r: FreeformResult, rule: str = "simple") -> dict[str, Any]:
+    """A free-form feature in ``results.json``: ``points`` are the compensated contact
+    points, ``directions`` the nominal normals, ``residuals`` the deviations along them
+    (the deviation map), ``nominal`` the theoretical contact points."""
+    s = r.summary
+    return {
+        "id": r.feature,
+        "kind": "freeform",
+        "method": r.method,
+        "ok": accepted(r.characteristics, rule),
+        "n": len(r.points),
+        "guides": list(r.guides),
+        "touch_stride": FREEFORM_STRIDE,
+        "deviation": {"min": _f(s.min), "max": _f(s.max), "mean": _f(s.mean),
+                      "rms": _f(s.rms)},
+        "nominal": [[_f(v) for v in p] for p in r.nominal],
+        "normals_used": [[_f(v) for v in n] for n in r.normals_used],
+        **_measured_json(r.characteristics, r.points, r.directions, r.residuals, rule),
+    }
+
+
+def _tol(lo: float | None, hi: float | None) -> str:
+    if lo is None and hi is None:
+        return "-"
+    if lo is None:
+        return f"<= {hi:.4f}"
+    if hi is None:
+        return f">= {lo:.4f}"
+    return f"{lo:+.4f}/{hi:+.4f}"
+
+
+def _all_rows(ing: Ingested) -> list[tuple[str, Row]]:
+    """Every characteristic row of every feature; a NOT EVALUATED feature without any
+    is one row named ``-``."""
+    out: list[tuple[str, Row]] = []
+    features: list[Evaluated | NotEvaluated] = [*ing.evaluated, *ing.not_evaluated]
+    for r in features:
+        rows = _rows_of(r, ing.rule) or [
+            ("-", None, None, None, None, None, NOT_EVALUATED, None, None, None, "")]
+        out += [(r.feature, row) for row in rows]
+    return out
+
+
+def _num(x: float | None, fmt: str) -> str:
+    return "" if x is None else format(x, fmt)
+
+
+def to_csv(ing: Ingested) -> str:
+    """``results.csv``: one row per characteristic (``status``: see :func:`to_json`)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["feature", "characteristic", "measured", "nominal", "deviation", "lower",
+                "upper", "status", "u", "U", "decision", "calibration", "method"])
+    for feature, (name, measured, nominal, deviation, lo, hi, status, u, big_u,
+                  decision, method) in _all_rows(ing):
+        w.writerow([feature, name, _num(measured, ".4f"), _num(nominal, ".4f"),
+                    _num(deviation, ".4f"), _num(lo, ".4f"), _num(hi, ".4f"), status,
+                    _num(u, ".5f"), _num(big_u, ".4f"), decision or "",
+                    ing.calibration_text, method])
+    return buf.getvalue()
+
+
+def to_table(ing: Ingested) -> str:
+    """The table ``probegen ingest`` prints, each NOT EVALUATED feature's reason and
+    the run's status."""
+    rows = [("feature", "char", "measured", "nominal", "deviation", "tolerance", "status",
+             "U", "decision", "method")]
+    for feature, (name, measured, nominal, deviation, lo, hi, status, _, big_u,
+                  decision, method) in _all_rows(ing):
+        rows.append((feature, name, _num(measured, ".4f") or "-", _num(nominal, ".4f") or "-",
+                     _num(deviation, "+.4f") or "-", _tol(lo, hi), status,
+                     _num(big_u, ".4f") or "-", decision or "-", method))
+    text = f"probe: {ing.calibration_text}\n" + _columns(rows)
+    text += (f"U: expanded uncertainty (k = {COVERAGE_FACTOR:g}); decision rule "
+             f"{ing.rule} (ISO 14253-1)\n")
+    text += "".join(f"{note}\n" for note in ing.uncertainty_notes)
+    for n in ing.not_evaluated:
+        text += f"{n.feature}: NOT EVALUATED: {n.reason}\n"
+    if ing.decisions:
+        text += "\n" + _columns([("feature", "value", "offline", "machine", "agrees")] + [
+            (d.feature, d.key, _opt(d.offline), _opt(d.machine),
+             {None: "-", True: "yes", False: "NO"}[d.agrees]) for d in ing.decisions])
+    finished = "" if ing.log.complete else " (the run did not finish)"
+    return text + f"status: {ing.status}{finished}\n"
+
+
+def _opt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.6f}"
+
+
+def _columns(rows: Sequence[tuple[str, ...]]) -> str:
+    """Rows as aligned columns (the first two left-aligned)."""
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
+                       for i, (cell, w) in enumerate(zip(row, widths, strict=True))).rstrip()
+             for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(ing: Ingested, out_dir: Path) -> tuple[Path, Path]:
+    """Write ``results.json`` and ``results.csv`` into ``out_dir``."""
+    from probegen.files import output_folder, write_file
+
+    output_folder(out_dir, "results.json and results.csv")
+    js = write_file(out_dir / "results.json", to_json(ing), "the results")
+    cs = write_file(out_dir / "results.csv", to_csv(ing), "the results table")
+    return js, cs

@@ -1,0 +1,3 @@
+"""The Macro B controller of the virtual machine: parser, variables,
+expressions, execution, motion.
+"""

@@ -1,0 +1,103 @@
+"""Settings of the virtual Fanuc control and the alarms its Macro B interpreter raises.
+
+Alarm numbers follow the Fanuc 0i-F program (PS) alarm list where one fits; alarms
+only the virtual machine raises (a limit of the simulation, not of the program) are
+numbered from 9000.  Macro alarms raised by the program itself (``#3000 = n``) are
+3000 + n, as on the control.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from probegen.sim.alarms import SimAlarm
+
+IMPROPER_G_CODE = 10
+FEED_ZERO = 11
+ILLEGAL_OFFSET = 30
+PROGRAM_NOT_FOUND = 76
+NESTING = 77
+SEQUENCE_NOT_FOUND = 78
+OVERFLOW = 111
+ZERO_DIVIDE = 112
+VARIABLE_RANGE = 115
+WRITE_PROTECTED = 116
+ARGUMENT_RANGE = 119
+MISSING_END = 124
+ILLEGAL_LOOP = 126
+ILLEGAL_SEQUENCE = 128
+ILLEGAL_ARGUMENT = 129
+MACRO_ALARM = 3000
+BLOCK_LIMIT = 9000
+NOT_OPEN = 9001
+UNSUPPORTED = 9010
+ILLEGAL_G10 = 9011
+
+MESSAGES = {
+    IMPROPER_G_CODE: "IMPROPER G-CODE",
+    FEED_ZERO: "FEED ZERO (COMMAND)",
+    ILLEGAL_OFFSET: "ILLEGAL OFFSET NUMBER",
+    PROGRAM_NOT_FOUND: "PROGRAM NOT FOUND",
+    NESTING: "SUB PROGRAM NESTING ERROR",
+    SEQUENCE_NOT_FOUND: "SEQUENCE NUMBER NOT FOUND",
+    OVERFLOW: "CALCULATED DATA OVERFLOW",
+    ZERO_DIVIDE: "ZERO DIVIDE",
+    VARIABLE_RANGE: "VARIABLE NO. OUT OF RANGE",
+    WRITE_PROTECTED: "WRITE PROTECTED VARIABLE",
+    ARGUMENT_RANGE: "ARGUMENT VALUE OUT OF RANGE",
+    MISSING_END: "MISSING END STATEMENT",
+    ILLEGAL_LOOP: "ILLEGAL LOOP NUMBER",
+    ILLEGAL_SEQUENCE: "ILLEGAL MACRO SEQUENCE NUMBER",
+    ILLEGAL_ARGUMENT: "ILLEGAL ARGUMENT ADDRESS",
+    BLOCK_LIMIT: "BLOCK LIMIT REACHED",
+    NOT_OPEN: "DPRNT WITHOUT POPEN",
+    UNSUPPORTED: "NOT SUPPORTED BY THE VIRTUAL MACHINE",
+    ILLEGAL_G10: "ILLEGAL G10 COMMAND",
+}
+"""The message of each alarm number (as the control shows it)."""
+
+
+def alarm(number: int, detail: str = "") -> SimAlarm:
+    """Return the alarm ``number`` with its standard message and an optional detail."""
+    message = MESSAGES.get(number, "ALARM")
+    return SimAlarm(number, f"{message} ({detail})" if detail else message)
+
+
+@dataclass(frozen=True, slots=True)
+class Settings:
+    """Parameters of the virtual control (the defaults are a stock 0i-F mill).
+
+    Attributes:
+        dprnt_blanks: DPRNT prints leading zeros as blanks, right-aligning numbers in
+            their field (parameter PRT = 0); the default suppresses them (PRT = 1), so
+            ``#1[53]`` of 12.3456 prints ``12.346`` and of 0.5 prints ``.500``.
+        dprnt_eol: what ends a DPRNT line (real controls send LF or CR LF per I/O
+            parameter; the default is LF).
+        calculator_input: an axis value written without a decimal point is in mm
+            (``X10`` = 10 mm, parameter DPI = 1); the default is the Fanuc default
+            (DPI = 0): it counts least input increments, ``X10`` = 0.010 mm
+            (0.0010 inch under G20).  Applies to literal numbers of X, Y, Z (also in
+            G10 and G65) and R in G10; values of variables and expressions are mm.
+        stop_at_m00: M00 ends the run (``stopped == "M00"``); by default M00 and M01
+            are recorded and the program continues, as after a cycle start.
+        rapid_mm_min: rapid traverse rate for the virtual clock (``#3001``).
+        home: the machine position when the program starts (machine coordinates, mm);
+            a real program starts wherever the last one left the spindle, usually at
+            the tool-change position high above the table.
+        max_nesting: subprogram and macro calls nested at most this deep (M98 + G65).
+        max_macro_nesting: G65 macro calls nested at most this deep (new local levels).
+        g_aliases: G codes of a builder's control read as Fanuc codes, e.g.
+            ``{100: 0, 131: 31}`` runs Brother programs whose G100 (tool change with
+            positioning) and G131 (skip) should move as G0 and G31 here.
+    """
+
+    dprnt_blanks: bool = False
+    dprnt_eol: str = "\n"
+    calculator_input: bool = False
+    stop_at_m00: bool = False
+    rapid_mm_min: float = 10_000.0
+    max_nesting: int = 10
+    max_macro_nesting: int = 5
+    g_aliases: Mapping[float, float] = field(default_factory=dict)
+    home: tuple[float, float, float] = (0.0, 0.0, 0.0)
