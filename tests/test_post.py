@@ -366,8 +366,10 @@ def test_cli_lists_skipped_statements(tmp_path: Path, capsys: pytest.CaptureFixt
 
 
 def test_evaluation_loads_neither_jinja2_nor_ocp_nor_the_simulator() -> None:
+    """post-ingest runs the DMIS interpreter (``sim.cmm``) but not the virtual machine."""
     code = ("import sys, probegen.post.evaluate; print(sorted(m for m in ('jinja2', 'OCP', "
-            "'probegen.sim', 'probegen.planning', 'probegen.dialects') if m in sys.modules))")
+            "'probegen.sim.vm', 'probegen.sim.contact', 'probegen.sim.macrob', "
+            "'probegen.planning', 'probegen.dialects') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=REPO)
     assert out.stdout.strip() == "[]"
