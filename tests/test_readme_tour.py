@@ -58,8 +58,12 @@ def expected_code(line: str) -> int:
 
 
 def named_outputs(line: str) -> list[str]:
-    """The files and folders ``line`` says it writes (stdout, ``-``, excluded)."""
-    args = build_parser().parse_args(shlex.split(line, comments=True)[1:])
+    """The files and folders ``line`` says it writes (stdout, ``-``, excluded); none for a
+    line that does not parse (running it then fails with its usage message)."""
+    try:
+        args = build_parser().parse_args(shlex.split(line, comments=True)[1:])
+    except SystemExit:
+        return []
     return [v for k, v in sorted(vars(args).items())
             if k in _OUTPUT_OPTIONS and k != "pty" and isinstance(v, str) and v != "-"
             and v in line]

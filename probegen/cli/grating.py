@@ -250,7 +250,8 @@ def _identify(args: argparse.Namespace) -> int:
 
 def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     """Add ``probegen grating plan|simulate|identify`` to the CLI's subparsers."""
-    g = sub.add_parser("grating", help="M5: 21 geometric errors from planar-grating paths")
+    g = sub.add_parser("grating", help="the 21 geometric errors of a three-axis machine "
+                                         "from planar-grating readings")
     gs = g.add_subparsers(dest="grating_command", required=True,
                            metavar="{plan,simulate,identify}")
     p = gs.add_parser("plan", help="write the grating programs (one per setup)")
@@ -260,7 +261,8 @@ def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--second-head", action="store_true",
                    help="add each plane with the second (longer) head: separates the Z "
                         "axis' pitch and yaw from its straightness")
-    p.add_argument("-d", "--dialect", default="fanuc", help="fanuc (default) or haas")
+    p.add_argument("-d", "--dialect", default="fanuc",
+                   help=f"dialect: {' or '.join(DIALECTS)} (default fanuc)")
     p.add_argument("-o", "--output", default="grating", help="output folder")
     p.set_defaults(func=_plan)
     s = gs.add_parser("simulate", help="run the programs on the virtual machine: readings")

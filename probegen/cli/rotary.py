@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from probegen.cli.options import dialect_help
 from probegen.cli.plan import _target
 from probegen.cli.probe import add_probe_options, probe_from_args
 from probegen.errors import ProbegenError
@@ -24,12 +25,14 @@ from probegen.files import read_input, write_file
 
 def add_rotary_commands(sub: Any) -> None:
     """Register ``rotary plan|sim|identify`` on the top-level subparsers ``sub``."""
-    ro = sub.add_parser("rotary", help="method M4: rotary-axis tests of a five-axis machine")
+    ro = sub.add_parser("rotary", help="rotary-axis tests of a five-axis machine (B +-90 deg test, "
+                                         "pivot calibration)")
     rsub = ro.add_subparsers(dest="rotary_command", required=True,
                              metavar="{plan,sim,identify}")
     p = rsub.add_parser("plan", help="plan a rotary test spec and write its program")
     p.add_argument("spec", help="rotary test spec (TOML), e.g. samples/rotary/m4.toml")
-    p.add_argument("-d", "--dialect", default="fanuc", help="dialect (fanuc, haas, linuxcnc)")
+    p.add_argument("-d", "--dialect", default="fanuc",
+                   help=f"dialect (default fanuc): {dialect_help(machine_tool=True)}")
     p.add_argument("-o", "--output", default="out",
                    help="output file, folder, or - for stdout (default: out/)")
     p.set_defaults(func=_plan)
