@@ -29,7 +29,7 @@ from probegen.cli.plan import _compile, _features, _plan, _sphere_points, _targe
 from probegen.cli.probe import add_probe_options, probe_from_args
 from probegen.cli.results import _PARITY, _capture, _ingest, _qif, _report, add_log_options
 from probegen.errors import ExitCode, ProbegenError
-from probegen.files import protect_inputs, read_input, write_file
+from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
 
 
@@ -390,15 +390,13 @@ def _run(args: argparse.Namespace) -> int:
     import probegen.cli.progress
 
     probegen.cli.progress.ENABLED = not args.quiet
-    protect_inputs(_inputs(args))
     try:
-        return int(args.func(args))
+        with inputs_protected(_inputs(args)):
+            return int(args.func(args))
     except ProbegenError as exc:
         _traceback(args.debug)
         print(f"probegen: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    finally:
-        protect_inputs(())
 
 
 _OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation", "pty"})
