@@ -20,7 +20,7 @@ from probegen.calibrate.grating_io import GratingReading, format_readings, read_
 from probegen.calibrate.identify import Identification
 from probegen.calibrate.identify_model import VolumetricModel
 from probegen.cli import options as cli_types
-from probegen.errors import CalibrationError, ProbegenError, UnsupportedError
+from probegen.errors import CalibrationError, ExitCode, ProbegenError, UnsupportedError
 from probegen.files import output_folder, write_file
 from probegen.machine.kinematics import PLANES, Machine
 from probegen.planning.grating import (
@@ -126,7 +126,7 @@ def _plan(args: argparse.Namespace) -> int:
         write_file(out / prog.file_name, prog.text, "a grating program", encoding="ascii")
         print(f"wrote {out / prog.file_name} ({prog.plan.setup.label}, "
               f"{len(prog.plan.stops)} stops)")
-    return 0
+    return ExitCode.OK
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -138,7 +138,7 @@ def _simulate(args: argparse.Namespace) -> int:
                                  seed=args.seed)
     write_file(args.output, format_readings(readings), "the grating readings", encoding="ascii")
     print(f"wrote {args.output} ({len(readings)} readings)")
-    return 0
+    return ExitCode.OK
 
 
 def write_outputs(out: Path, result: Identification, stepwise: Identification | None,
@@ -245,7 +245,7 @@ def _identify(args: argparse.Namespace) -> int:
         stepwise = None
     for line in write_outputs(Path(args.output), result, stepwise, readings[0].head):
         print(line)
-    return 0
+    return ExitCode.OK
 
 
 def add_grating_commands(sub: argparse._SubParsersAction) -> None:

@@ -19,7 +19,7 @@ from typing import Any
 from probegen.cli.options import dialect_help
 from probegen.cli.plan import _target
 from probegen.cli.probe import add_probe_options, probe_from_args
-from probegen.errors import ProbegenError
+from probegen.errors import ExitCode, ProbegenError
 from probegen.files import read_input, write_file
 
 
@@ -64,14 +64,14 @@ def _plan(args: argparse.Namespace) -> int:
     text = dialect.generate(plan.program)
     if args.output == "-":
         sys.stdout.write(text)
-        return 0
+        return ExitCode.OK
     target = write_file(_target(args.output, Path(args.spec).stem, dialect.EXTENSION, 1), text,
                         "the rotary test program", encoding="ascii")
     for st in plan.stations:
         print(f"{st.feature:5} B{st.b:7.2f} C{st.c:7.2f}  {len(st.directions):2} touches  "
               f"retract {st.retract:.1f} mm")
     print(f"least spare clearance {plan.clearance:.3f} mm; wrote {target}")
-    return 0
+    return ExitCode.OK
 
 
 def _sim(args: argparse.Namespace) -> int:
@@ -102,8 +102,8 @@ def _sim(args: argparse.Namespace) -> int:
         print(f"{result.touches} touches; wrote {args.output}")
     if result.alarm:
         print(f"probegen: alarm {result.alarm}", file=sys.stderr)
-        return 10
-    return 0
+        return ExitCode.SIM_ALARM
+    return ExitCode.OK
 
 
 def _identify(args: argparse.Namespace) -> int:
@@ -130,7 +130,7 @@ def _identify(args: argparse.Namespace) -> int:
         shift = pivot.compensation
     if args.compensation:
         _write_compensation(spec, shift, Path(args.compensation))
-    return 0
+    return ExitCode.OK
 
 
 def _write_compensation(spec: Any, shift: tuple[float, float, float], target: Path) -> None:
