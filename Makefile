@@ -1,4 +1,6 @@
 # probegen — see README.md.  Everything runs from a venv in .venv, made on first use.
+# BIN and STAMP may be given on the command line: tests/test_readme_tour.py runs
+# `make demo BIN=<folder with a probegen shim> STAMP=<an up-to-date file>` (no venv made).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin

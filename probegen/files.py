@@ -16,7 +16,7 @@ The policy for existing outputs (README, "Output files"):
 - the raw capture log is never overwritten (:mod:`probegen.results.capture`): it is the
   only record of a measurement;
 - an output is never written over one of the command's own input files (``probegen qif
-  run.log -o run.log`` would destroy the log): :func:`protect_inputs`;
+  run.log -o run.log`` would destroy the log): :func:`inputs_protected`;
 - an output folder is created with its parents; a file where a folder is meant, or a
   folder where a file is meant, is an error that names the path.
 
@@ -26,11 +26,12 @@ was found, never an ``OSError`` traceback.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import math
 import os
 import tomllib
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,6 +41,7 @@ from probegen.errors import ExitCode, ProbegenError, SpecError, did_you_mean
 def load_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file; a missing or malformed file is a ``SpecError``."""
     p = Path(path)
+    note_input(p)
     try:
         data = p.read_bytes()
     except FileNotFoundError:
@@ -215,6 +217,9 @@ class Table:
 
 
 _PROTECTED: set[Path] = set()
+"""The running command's input files (resolved); empty outside a command."""
+_GUARDING = False
+"""Whether a command is running (:func:`inputs_protected`): only then are inputs noted."""
 
 
 class OutputError(ProbegenError):
@@ -223,11 +228,27 @@ class OutputError(ProbegenError):
     exit_code = ExitCode.OUTPUT  # 73, sysexits' EX_CANTCREAT
 
 
-def protect_inputs(paths: Iterable[str | os.PathLike[str]]) -> None:
-    """Refuse, from now on, to write an output over any of these existing files (the
-    command's inputs); replaces the previous set."""
+@contextlib.contextmanager
+def inputs_protected(paths: Iterable[str | os.PathLike[str]]) -> Iterator[None]:
+    """While a command runs: refuse to write an output over any of these existing files
+    (the command's inputs on its line) or over any file it reads meanwhile
+    (:func:`note_input`: the model, profile or calibration a spec names)."""
+    global _GUARDING
     _PROTECTED.clear()
     _PROTECTED.update(Path(p).resolve() for p in paths if Path(p).is_file())
+    _GUARDING = True
+    try:
+        yield
+    finally:
+        _GUARDING = False
+        _PROTECTED.clear()
+
+
+def note_input(path: str | os.PathLike[str]) -> None:
+    """Record that the running command reads the file ``path``, so that no output of the
+    command goes over it; outside a command (library use) nothing is recorded."""
+    if _GUARDING and Path(path).is_file():
+        _PROTECTED.add(Path(path).resolve())
 
 
 def output_folder(path: str | os.PathLike[str], what: str) -> Path:
@@ -287,6 +308,7 @@ def read_input(path: str | os.PathLike[str], what: str,
         ``error``: the file is missing, is a folder or cannot be read.
     """
     source = Path(path)
+    note_input(source)
     if source.is_dir():
         raise error(f"{source}: expected {what}, found a folder")
     try:

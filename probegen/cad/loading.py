@@ -34,6 +34,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 
 from probegen.cad.faces import FaceRecord, Model, _record, _vec3
 from probegen.errors import ModelError
+from probegen.files import note_input
 
 STEP_HEADER = "ISO-10303-21;"
 STEP_TERMINATOR = "END-ISO-10303-21;"
@@ -62,6 +63,7 @@ def load_step(path: str | os.PathLike[str]) -> Model:
             the reader, or holds no faces.
     """
     name = os.fspath(path)
+    note_input(name)  # no output of the running command goes over the model
     _check_file(name)
     brep, records = _isolated(name)
     shape = TopoDS_Shape()

@@ -24,12 +24,12 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from probegen import __version__
-from probegen.cli.options import finite, non_negative, positive
+from probegen.cli.options import dialect_help, finite, non_negative, positive
 from probegen.cli.plan import _compile, _features, _plan, _sphere_points, _target
 from probegen.cli.probe import add_probe_options, probe_from_args
 from probegen.cli.results import _PARITY, _capture, _ingest, _qif, _report, add_log_options
 from probegen.errors import ExitCode, ProbegenError
-from probegen.files import protect_inputs, read_input, write_file
+from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
 
 
@@ -167,7 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("compile", help="plan a spec and write the measuring program(s)")
     c.add_argument("spec", help="feature spec (TOML)")
     c.add_argument("-d", "--dialect", action="append",
-                   help="dialect to emit (repeatable; default: the spec's)")
+                   help="dialect to emit (repeatable; default: the spec's): "
+                        f"{dialect_help()}")
     c.add_argument("-o", "--output", default="out",
                    help="output file, folder, or - for stdout (default: out/)")
     c.add_argument("--calibration", metavar="FILE",
@@ -182,7 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.set_defaults(func=_features)
 
     pl = sub.add_parser("plan", help="plan a spec (or every revolved feature of a model) "
-                                     "and compare the M2 paths with the baseline")
+                                     "and compare the path's length and time with a "
+                                     "baseline and a lower bound")
     pl.add_argument("input", help="feature spec (TOML), or a STEP model with --all-revolved")
     pl.add_argument("--all-revolved", action="store_true",
                     help="plan every accessible revolved feature of the model (default "
@@ -190,8 +192,12 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
     pl.set_defaults(func=_plan)
 
-    s = sub.add_parser("sphere-points", help="show a sphere-test layout and its figures")
-    s.add_argument("--layout", choices=("iso", "octahedral", "cap"), default="octahedral")
+    s = sub.add_parser("sphere-points", help="show a point layout of the sphere probing "
+                                             "test (ISO 10360-5) and its figures")
+    s.add_argument("--layout", choices=("iso", "octahedral", "cap"), default="octahedral",
+                   help="iso: the 25 points ISO 10360-5 recommends; octahedral: 25 nearly "
+                        "even points; cap: --points points on a spherical cap (default "
+                        "octahedral)")
     s.add_argument("--points", type=int, default=25, help="number of points (cap only)")
     s.add_argument("--max-polar-angle", type=finite, default=90.0,
                    help="largest polar angle in degrees (cap only)")
@@ -228,7 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="software flow control (on)")
     cp.add_argument("--timeout", type=positive, default=60.0,
                     help="stop after this many idle seconds (60)")
-    cp.add_argument("--append", action="store_true", help="append to an existing log")
+    cp.add_argument("--append", action="store_true",
+                    help="add to an existing raw log (a resumed program) instead of refusing it")
     cp.set_defaults(func=_capture)
 
     sm = sub.add_parser("sim", help="run a program on the virtual machine")
@@ -313,7 +320,8 @@ def _post_parsers(sub: Any) -> None:
     po = sub.add_parser("post", help="post-process a DMIS program into a machine-tool "
                                      "probing program (and its feature map)")
     po.add_argument("program", help="the DMIS program (.dmi, .dms)")
-    po.add_argument("-d", "--dialect", default="fanuc", help="dialect (default fanuc)")
+    po.add_argument("-d", "--dialect", default="fanuc",
+                    help=f"dialect (default fanuc): {dialect_help(machine_tool=True)}")
     po.add_argument("--machine", required=True,
                     help="machine profile (TOML); its stylus must be the program's sensor")
     po.add_argument("--model", required=True,
@@ -382,15 +390,13 @@ def _run(args: argparse.Namespace) -> int:
     import probegen.cli.progress
 
     probegen.cli.progress.ENABLED = not args.quiet
-    protect_inputs(_inputs(args))
     try:
-        return int(args.func(args))
+        with inputs_protected(_inputs(args)):
+            return int(args.func(args))
     except ProbegenError as exc:
         _traceback(args.debug)
         print(f"probegen: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    finally:
-        protect_inputs(())
 
 
 _OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation", "pty"})

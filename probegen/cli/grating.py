@@ -20,7 +20,7 @@ from probegen.calibrate.grating_io import GratingReading, format_readings, read_
 from probegen.calibrate.identify import Identification
 from probegen.calibrate.identify_model import VolumetricModel
 from probegen.cli import options as cli_types
-from probegen.errors import CalibrationError, ProbegenError, UnsupportedError
+from probegen.errors import CalibrationError, ExitCode, ProbegenError, UnsupportedError
 from probegen.files import output_folder, write_file
 from probegen.machine.kinematics import PLANES, Machine
 from probegen.planning.grating import (
@@ -126,7 +126,7 @@ def _plan(args: argparse.Namespace) -> int:
         write_file(out / prog.file_name, prog.text, "a grating program", encoding="ascii")
         print(f"wrote {out / prog.file_name} ({prog.plan.setup.label}, "
               f"{len(prog.plan.stops)} stops)")
-    return 0
+    return ExitCode.OK
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -138,7 +138,7 @@ def _simulate(args: argparse.Namespace) -> int:
                                  seed=args.seed)
     write_file(args.output, format_readings(readings), "the grating readings", encoding="ascii")
     print(f"wrote {args.output} ({len(readings)} readings)")
-    return 0
+    return ExitCode.OK
 
 
 def write_outputs(out: Path, result: Identification, stepwise: Identification | None,
@@ -245,12 +245,13 @@ def _identify(args: argparse.Namespace) -> int:
         stepwise = None
     for line in write_outputs(Path(args.output), result, stepwise, readings[0].head):
         print(line)
-    return 0
+    return ExitCode.OK
 
 
 def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     """Add ``probegen grating plan|simulate|identify`` to the CLI's subparsers."""
-    g = sub.add_parser("grating", help="M5: 21 geometric errors from planar-grating paths")
+    g = sub.add_parser("grating", help="the 21 geometric errors of a three-axis machine "
+                                         "from planar-grating readings")
     gs = g.add_subparsers(dest="grating_command", required=True,
                            metavar="{plan,simulate,identify}")
     p = gs.add_parser("plan", help="write the grating programs (one per setup)")
@@ -260,7 +261,8 @@ def add_grating_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--second-head", action="store_true",
                    help="add each plane with the second (longer) head: separates the Z "
                         "axis' pitch and yaw from its straightness")
-    p.add_argument("-d", "--dialect", default="fanuc", help="fanuc (default) or haas")
+    p.add_argument("-d", "--dialect", default="fanuc",
+                   help=f"dialect: {' or '.join(DIALECTS)} (default fanuc)")
     p.add_argument("-o", "--output", default="grating", help="output folder")
     p.set_defaults(func=_plan)
     s = gs.add_parser("simulate", help="run the programs on the virtual machine: readings")

@@ -49,3 +49,17 @@ def seed(text: str) -> int:
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 0, found {text!r}")
     return value
+
+
+def dialect_help(*, machine_tool: bool = False) -> str:
+    """The dialects a ``-d`` option accepts, named from the dialect registry with what each
+    writes (``machine_tool``: only those with a DPRNT-style log, i.e. not DMIS)."""
+    from probegen.dialects import REGISTRY
+
+    return "; ".join(f"{name}: {_first_line(cls.__doc__)}"
+                     for name, cls in sorted(REGISTRY.items())
+                     if cls.RUNTIME_VARIABLES or not machine_tool)
+
+
+def _first_line(doc: str | None) -> str:
+    return (doc or "").strip().splitlines()[0].rstrip(".") if doc else ""

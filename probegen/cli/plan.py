@@ -119,7 +119,8 @@ def _plan(args: argparse.Namespace) -> int:
     if planned.revolved or not planned.freeform:
         sys.stdout.write(metrics_table(planned.revolved, spec.machine))
     for p in planned.sphere_tests:
-        print(f"{p.feature.id}: sphere test (M1), {len(p.directions)} points: not compared")
+        print(f"{p.feature.id}: sphere probing test (ISO 10360-5), {len(p.directions)} points: "
+              "not compared")
     _print_freeform(planned, "")
     if planned.tour is not None:
         toured = {r.spec.id for r in planned.revolved} | {f.spec.id for f in planned.freeform}

@@ -105,7 +105,9 @@ _PARITY = {"N": "N", "E": "E", "O": "O", "M": "M", "S": "S"}
 def _capture(args: argparse.Namespace) -> int:
     from probegen.results.capture import capture
 
-    print(f"capturing from {args.port} into {args.out} ({args.baud} baud, {args.bits}"
+    where = (f"appending to {args.out}" if args.append and Path(args.out).is_file()
+             else f"into {args.out}")
+    print(f"capturing from {args.port} {where} ({args.baud} baud, {args.bits}"
           f"{args.parity}{args.stop_bits:g}, xon/xoff {'on' if args.xonxoff else 'off'}); "
           "start the program now, Ctrl-C stops", file=sys.stderr)
     from probegen.cli.progress import Bar
@@ -119,7 +121,9 @@ def _capture(args: argparse.Namespace) -> int:
            "timeout": f"nothing arrived for {args.timeout:g} s",
            "interrupted": "stopped by the user",
            "disconnected": f"the port went away ({res.detail})"}[res.reason]
-    print(f"capture ended: {why}; {res.bytes} bytes kept in {res.path}")
+    kept = (f"{res.bytes} bytes added to {res.path} after its {res.offset} earlier bytes"
+            if res.offset else f"{res.bytes} bytes kept in {res.path}")
+    print(f"capture ended: {why}; {kept}")
     return ExitCode.OK if res.reason == "end-marker" else ExitCode.CAPTURE_INCOMPLETE
 
 

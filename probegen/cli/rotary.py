@@ -16,20 +16,23 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from probegen.cli.options import dialect_help
 from probegen.cli.plan import _target
 from probegen.cli.probe import add_probe_options, probe_from_args
-from probegen.errors import ProbegenError
+from probegen.errors import ExitCode, ProbegenError
 from probegen.files import read_input, write_file
 
 
 def add_rotary_commands(sub: Any) -> None:
     """Register ``rotary plan|sim|identify`` on the top-level subparsers ``sub``."""
-    ro = sub.add_parser("rotary", help="method M4: rotary-axis tests of a five-axis machine")
+    ro = sub.add_parser("rotary", help="rotary-axis tests of a five-axis machine (B +-90 deg test, "
+                                         "pivot calibration)")
     rsub = ro.add_subparsers(dest="rotary_command", required=True,
                              metavar="{plan,sim,identify}")
     p = rsub.add_parser("plan", help="plan a rotary test spec and write its program")
     p.add_argument("spec", help="rotary test spec (TOML), e.g. samples/rotary/m4.toml")
-    p.add_argument("-d", "--dialect", default="fanuc", help="dialect (fanuc, haas, linuxcnc)")
+    p.add_argument("-d", "--dialect", default="fanuc",
+                   help=f"dialect (default fanuc): {dialect_help(machine_tool=True)}")
     p.add_argument("-o", "--output", default="out",
                    help="output file, folder, or - for stdout (default: out/)")
     p.set_defaults(func=_plan)
@@ -61,14 +64,14 @@ def _plan(args: argparse.Namespace) -> int:
     text = dialect.generate(plan.program)
     if args.output == "-":
         sys.stdout.write(text)
-        return 0
+        return ExitCode.OK
     target = write_file(_target(args.output, Path(args.spec).stem, dialect.EXTENSION, 1), text,
                         "the rotary test program", encoding="ascii")
     for st in plan.stations:
         print(f"{st.feature:5} B{st.b:7.2f} C{st.c:7.2f}  {len(st.directions):2} touches  "
               f"retract {st.retract:.1f} mm")
     print(f"least spare clearance {plan.clearance:.3f} mm; wrote {target}")
-    return 0
+    return ExitCode.OK
 
 
 def _sim(args: argparse.Namespace) -> int:
@@ -99,8 +102,8 @@ def _sim(args: argparse.Namespace) -> int:
         print(f"{result.touches} touches; wrote {args.output}")
     if result.alarm:
         print(f"probegen: alarm {result.alarm}", file=sys.stderr)
-        return 10
-    return 0
+        return ExitCode.SIM_ALARM
+    return ExitCode.OK
 
 
 def _identify(args: argparse.Namespace) -> int:
@@ -127,7 +130,7 @@ def _identify(args: argparse.Namespace) -> int:
         shift = pivot.compensation
     if args.compensation:
         _write_compensation(spec, shift, Path(args.compensation))
-    return 0
+    return ExitCode.OK
 
 
 def _write_compensation(spec: Any, shift: tuple[float, float, float], target: Path) -> None:
