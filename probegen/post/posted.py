@@ -8,10 +8,13 @@ post-ingest``.  Lengths in mm, work coordinates.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from probegen import ir
-from probegen.planning.collision import SegmentClearance
-from probegen.sim.cmm.interpreter import SkippedStatement
+
+if TYPE_CHECKING:  # annotations only: reading a feature map loads no planning
+    from probegen.planning.collision import SegmentClearance
+    from probegen.sim.cmm.interpreter import SkippedStatement
 
 Vec3 = tuple[float, float, float]
 
