@@ -11,7 +11,7 @@ how it stopped and its variables::
     result.alarm        # Alarm(number, message, line, source) or None
     result.output       # POPEN "%" line, DPRNT lines, PCLOS "%" line
 
-Conventions (details in the module docstrings of ``probegen.sim.macrob_*``):
+Conventions (details in the module docstrings of ``probegen.sim.macrob.*``):
 
 * Output: POPEN and PCLOS each send a line ``%``; every DPRNT line ends with LF
   (``Settings.dprnt_eol``; real controls send LF or CR LF per I/O parameter).  DPRNT
