@@ -1,6 +1,6 @@
-"""Fitted features against their nominals: deviations, form, pass/fail.
+"""The sphere test (method M1, ISO 10360-5): the probe measured on a reference sphere.
 
-The sphere test (method M1, ISO 10360-5): a least-squares (Gaussian) sphere through the
+A least-squares (Gaussian) sphere through the
 compensated contact points; radial residuals ``r_i = |P_i − C| − R``; probing form error
 ``P_FTU = max r_i − min r_i`` (least squares, as ISO 10360-5 defines it); size error
 ``P_STU = D_fit − D_cal``.  When the points were compensated with the nominal ball
