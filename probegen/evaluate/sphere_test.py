@@ -1,14 +1,14 @@
 """The sphere test (method M1, ISO 10360-5): the probe measured on a reference sphere.
 
-A least-squares (Gaussian) sphere through the
-compensated contact points; radial residuals ``r_i = |P_i − C| − R``; probing form error
-``P_FTU = max r_i − min r_i`` (least squares, as ISO 10360-5 defines it); size error
-``P_STU = D_fit − D_cal``.  When the points were compensated with the nominal ball
-radius ``r``, the probe's effective radius is ``r_eff = r + R_fit − R_cal`` (a smaller
-effective radius, from pre-travel, makes the sphere look smaller), and the effective
-radius in each measured direction is ``r + |P_i − C| − R_cal``: that is the probe
-calibration the test produces.  ``POS`` is the ISO 1101 position zone diameter,
-``2 |C − C_nominal|``, as for every kind (docs/results.md).
+A least-squares (Gaussian) sphere through the compensated contact points; radial
+residuals ``r_i = |P_i − C| − R``; probing form error ``P_FTU = max r_i − min r_i``
+(least squares, as ISO 10360-5 defines it); size error ``P_STU = D_fit − D_cal``. When
+the points were compensated with the nominal ball radius ``r``, the probe's effective
+radius is ``r_eff = r + R_fit − R_cal`` (a smaller effective radius, from pre-travel,
+makes the sphere look smaller), and the effective radius in each measured direction is
+``r + |P_i − C| − R_cal``: that is the probe calibration the test produces. ``POS`` is
+the ISO 1101 position zone diameter, ``2 |C − C_nominal|``, as for every kind
+(docs/results.md).
 """
 
 from __future__ import annotations
