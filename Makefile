@@ -31,6 +31,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
+	$(BIN)/lint-imports
 	$(BIN)/ruff check probegen tests benchmarks samples
 	$(BIN)/mypy probegen
 
@@ -48,4 +49,4 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sphere_test.py
 
 clean:
-	rm -rf $(VENV) out build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) out build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache .hypothesis .import_linter_cache

@@ -44,6 +44,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from probegen.evaluate import compensate_freeform as cf  # noqa: E402
+from probegen.geometry import freeform_offsets as fo  # noqa: E402
 from probegen.geometry.bspline import (  # noqa: E402
     BSplineSurface,
     clamped_knots,
@@ -117,9 +118,9 @@ def simulate(case: Case, *, grid: int, sigma_um: float, rho: float = 0.5,
     # probing down at the guide points and at the extra touches
     down = touch(case.true, down_lines(xy), DOWN, xy)
     o_down = noisy(down.centre, DOWN, sigma, rng)
-    pair_xy = xy[:, None, :] + cf.two_d_offsets(n_nom, spacing=spacing)[:, :, :2]
+    pair_xy = xy[:, None, :] + fo.two_d_offsets(n_nom, spacing=spacing)[:, :, :2]
     pairs = _touch_many(case.true, pair_xy, sigma, rng)
-    tri_xy = xy[:, None, :] + cf.micro_plane_offsets(radius=rho, count=count)[None, :, :2]
+    tri_xy = xy[:, None, :] + fo.micro_plane_offsets(radius=rho, count=count)[None, :, :2]
     triples = _touch_many(case.true, tri_xy, sigma, rng)
     # vector probing along the nominal normal, from 2 mm above the theoretical centre
     start = nom.centre + 2.0 * n_nom

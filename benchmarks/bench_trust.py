@@ -46,9 +46,9 @@ sys.path.insert(0, str(REPO))
 from probegen import cad  # noqa: E402
 from probegen.dialects import get_dialect  # noqa: E402
 from probegen.errors import ProbegenError  # noqa: E402
-from probegen.evaluate.characteristics import evaluate_sphere_test  # noqa: E402
 from probegen.evaluate.ingest import Ingested, ingest  # noqa: E402
 from probegen.evaluate.revolved import Nominal, evaluate_revolved  # noqa: E402
+from probegen.evaluate.sphere_test import evaluate_sphere_test  # noqa: E402
 from probegen.geometry.fits_axial import fit_cylinder  # noqa: E402
 from probegen.geometry.uncertainty import Budget  # noqa: E402
 from probegen.machine.calibration import ProbeCalibration  # noqa: E402

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 from probegen.errors import ProbegenError
 from probegen.evaluate import compensate_freeform as cf
+from probegen.geometry import freeform_offsets as fo
 from probegen.geometry.bspline import BSplineSurface, height_field
 from probegen.geometry.offset_surface import ball_centres
 from probegen.machine.calibration import ProbeCalibration
@@ -67,11 +68,11 @@ def test_two_d_and_micro_plane_are_exact_on_a_plane(slope: float) -> None:
     o = touch_down(surf, xy)
     n = plane_normal(slope)
     nominal = np.tile(n, (3, 1))
-    pairs = touch_down(surf, xy[:, None, :] + cf.two_d_offsets(nominal)[:, :, :2])
+    pairs = touch_down(surf, xy[:, None, :] + fo.two_d_offsets(nominal)[:, :, :2])
     two = cf.two_d(o, pairs, R)
-    tri = touch_down(surf, xy[:, None, :] + cf.micro_plane_offsets(radius=0.2)[None, :, :2])
+    tri = touch_down(surf, xy[:, None, :] + fo.micro_plane_offsets(radius=0.2)[None, :, :2])
     micro = cf.micro_plane(o, tri, R)
-    quad = touch_down(surf, xy[:, None, :] + cf.micro_plane_offsets(count=4)[None, :, :2])
+    quad = touch_down(surf, xy[:, None, :] + fo.micro_plane_offsets(count=4)[None, :, :2])
     micro4 = cf.micro_plane(o, quad, R)
     for comp in (two, micro, micro4):
         np.testing.assert_allclose(comp.normals, nominal, atol=1e-10)
@@ -89,14 +90,14 @@ def test_two_d_misses_the_cross_slope() -> None:
     xy = np.array([[10.0, 10.0]])
     o = touch_down(surf, xy)
     along_x = np.array([[-math.sin(ax), 0.0, math.cos(ax)]])  # nominal without the y slope
-    pairs = touch_down(surf, xy[:, None, :] + cf.two_d_offsets(along_x)[:, :, :2])
+    pairs = touch_down(surf, xy[:, None, :] + fo.two_d_offsets(along_x)[:, :, :2])
     two = cf.two_d(o, pairs, R)
     est = two.normals[0]
     assert abs(est[1]) < 1e-12  # the estimate stays in the x-z plane
     error = (two.contacts[0] - (o[0] - R * n)) @ n
     assert error == pytest.approx(R * (1 - est @ n), abs=1e-12)
     assert error > 1e-3  # tens of µm: the documented limit of the 2-D method
-    tri = touch_down(surf, xy[:, None, :] + cf.micro_plane_offsets()[None, :, :2])
+    tri = touch_down(surf, xy[:, None, :] + fo.micro_plane_offsets()[None, :, :2])
     np.testing.assert_allclose(cf.micro_plane(o, tri, R).normals[0], n, atol=1e-10)
 
 
@@ -110,7 +111,7 @@ def test_micro_plane_on_a_sphere_stays_within_its_error_model() -> None:
     o = touch_down(cap, xy)
     truth = ball_centres(cap, np.column_stack([xy, [100.0, 100.0]]), DOWN, R, xy)
     for count, bound in ((3, 1e-4), (4, 1e-4)):
-        offsets = cf.micro_plane_offsets(radius=0.5, count=count)
+        offsets = fo.micro_plane_offsets(radius=0.5, count=count)
         touches = touch_down(cap, xy[:, None, :] + offsets[None, :, :2])
         comp = cf.micro_plane(o, touches, R)
         angle = np.arccos(np.clip(np.einsum("ij,ij->i", comp.normals, truth.normal), -1, 1))
@@ -129,7 +130,7 @@ def test_four_touches_cancel_the_quadratic_aliasing() -> None:
     truth = ball_centres(saddle, np.column_stack([xy, [100.0]]), DOWN, R, xy).normal[0]
     angles = {}
     for count in (3, 4):
-        offsets = cf.micro_plane_offsets(radius=0.5, count=count, phase=0.3)
+        offsets = fo.micro_plane_offsets(radius=0.5, count=count, phase=0.3)
         comp = cf.micro_plane(o, touch_down(saddle, xy[:, None, :] + offsets[None, :, :2]), R)
         angles[count] = math.acos(min(1.0, float(comp.normals[0] @ truth)))
     assert angles[3] > 10 * angles[4]
@@ -162,14 +163,14 @@ def test_calibrated_radius_is_applied_along_the_normal_used() -> None:
 
 def test_layouts() -> None:
     n = np.array([[0.0, 0.0, 1.0], [-0.5, 0.0, math.sqrt(0.75)], [0.3, 0.4, 0.866]])
-    s = cf.slope_directions(n)
+    s = fo.slope_directions(n)
     np.testing.assert_allclose(s[0], [1.0, 0.0, 0.0])  # flat: +X
     np.testing.assert_allclose(s[1], [-1.0, 0.0, 0.0], atol=1e-12)
     np.testing.assert_allclose(s[2], [0.6, 0.8, 0.0], atol=1e-12)
-    pairs = cf.two_d_offsets(n, spacing=0.4)
+    pairs = fo.two_d_offsets(n, spacing=0.4)
     np.testing.assert_allclose(pairs[2], [[-0.24, -0.32, 0.0], [0.24, 0.32, 0.0]])
     tilted = np.array([1.0, 1.0, 1.0]) / math.sqrt(3)
-    ring = cf.micro_plane_offsets(radius=0.3, count=5, probe_direction=tilted)
+    ring = fo.micro_plane_offsets(radius=0.3, count=5, probe_direction=tilted)
     np.testing.assert_allclose(np.linalg.norm(ring, axis=1), 0.3)
     np.testing.assert_allclose(ring @ tilted, 0.0, atol=1e-15)
     np.testing.assert_allclose(ring.sum(axis=0), 0.0, atol=1e-15)
@@ -221,9 +222,9 @@ def test_form_slopes_quadric_is_exact_for_quadratic_maps_on_stretched_grids() ->
     (lambda: cf.naive([[0, 0, math.nan]], R), "finite"),
     (lambda: cf.naive([[0, 0]], R), "shape"),
     (lambda: cf.naive([[0, 0, 0]], R, probe_direction=(0, 0, 0)), "non-zero"),
-    (lambda: cf.two_d_offsets([[0, 0, 1]], spacing=0.0), "positive length"),
-    (lambda: cf.micro_plane_offsets(radius=-1.0), "positive length"),
-    (lambda: cf.micro_plane_offsets(count=2), "integer >= 3"),
+    (lambda: fo.two_d_offsets([[0, 0, 1]], spacing=0.0), "positive length"),
+    (lambda: fo.micro_plane_offsets(radius=-1.0), "positive length"),
+    (lambda: fo.micro_plane_offsets(count=2), "integer >= 3"),
     (lambda: cf.normal_error_limit(0.0, 1e-4), "positive radius"),
 ])
 def test_bad_data_raise_probegen_error(call: object, match: str) -> None:

@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probegen.errors import SpecError
-from probegen.evaluate.characteristics import evaluate_sphere_test
 from probegen.evaluate.revolved import Nominal, evaluate_revolved
+from probegen.evaluate.sphere_test import evaluate_sphere_test
 from probegen.geometry import minimum_zone as mz
 from probegen.geometry.fits import (
     fit_circle_2d,

@@ -20,3 +20,11 @@ def test_package_list_matches_the_source_tree() -> None:
 def test_resources_find_grammars_and_templates() -> None:
     assert "statement" in resources.grammar_text("dmis")
     assert "G31" in resources.template_text("fanuc", "program.j2")
+
+
+def test_every_source_directory_is_a_package() -> None:
+    """A directory of modules without ``__init__.py`` would escape the package list above
+    (and the wheel): every directory under probegen/ holding modules is a package."""
+    dirs = {p.parent for p in (REPO / "probegen").rglob("*.py")}
+    missing = sorted(str(d.relative_to(REPO)) for d in dirs if not (d / "__init__.py").exists())
+    assert len(dirs) > 10 and missing == []

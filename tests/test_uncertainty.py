@@ -24,9 +24,10 @@ from mutations import mutate
 
 from probegen.cli.app import main
 from probegen.errors import ExitCode, ProbegenError, SpecError
-from probegen.evaluate.characteristics import Characteristic, evaluate_sphere_test
+from probegen.evaluate.characteristics import Characteristic
 from probegen.evaluate.ingest import ingest
 from probegen.evaluate.revolved import Nominal, evaluate_revolved
+from probegen.evaluate.sphere_test import evaluate_sphere_test
 from probegen.geometry.uncertainty import Budget, decide, few_dof_note, verdict
 from probegen.machine.calibration import load_calibration
 from probegen.machine.profile import load_profile

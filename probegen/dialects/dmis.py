@@ -64,7 +64,8 @@ class Dmis(Dialect):
                            if isinstance(n, ir.Check) and n.fit == "line"}
         body = [self.block(node) for node in program.body if not isinstance(node, final)]
         frame = frame_lines(self, [n for n in program.body if isinstance(n, final)],
-                            [n.feature for n in program.body if isinstance(n, ir.Check)])
+                            [n.feature for n in program.body if isinstance(n, ir.Check)],
+                            self.directions)
         if frame:
             body.append({"kind": "lines", "lines": frame})
         frames = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))

@@ -19,19 +19,17 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from probegen.dialects.base import Dialect
 from probegen.errors import UnsupportedError
 from probegen.ir.actions import ActionNode, Align, Check, SetWorkOffset, UpdateTool, describe
-
-if TYPE_CHECKING:
-    from probegen.dialects.dmis import Dmis
 
 FORM_WORD = {"circle": "CIRLTY", "line": "STRGHT", "plane": "FLAT"}
 """The DMIS form tolerance of each fit."""
 
 
-def check_lines(d: Dmis, node: Check) -> list[str]:
+def check_lines(d: Dialect, node: Check) -> list[str]:
     """Tolerance definitions, their evaluation and output for one checked feature."""
     if node.on_fail != "continue":
         raise _unsupported(d, node, f"on_out_of_tolerance = {node.on_fail!r}: a DMIS "
@@ -58,9 +56,10 @@ def check_lines(d: Dmis, node: Check) -> list[str]:
     return out
 
 
-def frame_lines(d: Dmis, nodes: list[Any], checked: list[str]) -> list[str]:
+def frame_lines(d: Dialect, nodes: list[Any], checked: list[str],
+                directions: dict[str, float]) -> list[str]:
     """The part frame from the alignment and work offsets, then the checked features
-    reported in it."""
+    reported in it (``directions``: the nominal direction of each checked line in XY, degrees)."""
     for node in nodes:
         if isinstance(node, UpdateTool):
             raise _unsupported(d, node, "a CMM has no tool offsets; compute the correction "
@@ -72,7 +71,7 @@ def frame_lines(d: Dmis, nodes: list[Any], checked: list[str]) -> list[str]:
     out = ["$$ the part frame: measured features at their nominal places"]
     for a in aligns:
         out.append(f"D({a.feature}_R)=ROTATE/ZAXIS,FA({a.feature}),XDIR")
-        direction = d.directions.get(a.feature, 0.0)
+        direction = directions.get(a.feature, 0.0)
         if direction:
             out.append(f"D({a.feature}_N)=ROTATE/ZAXIS,{d.num(-direction, 6)}")
     for w in offsets:
@@ -85,5 +84,5 @@ def frame_lines(d: Dmis, nodes: list[Any], checked: list[str]) -> list[str]:
     return out
 
 
-def _unsupported(d: Dmis, node: ActionNode, why: str) -> UnsupportedError:
+def _unsupported(d: Dialect, node: ActionNode, why: str) -> UnsupportedError:
     return UnsupportedError(f"dialect {d.NAME!r} cannot express {describe(node)}: {why}")

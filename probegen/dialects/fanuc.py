@@ -32,69 +32,18 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from probegen import ir
-from probegen.constants import tol
-from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc_actions import lower_action
-
-SCRATCH = 90
-"""Offset of the scratch variables (three targets and one check sum) from the base."""
+from probegen.dialects.macro_b import SCRATCH, MacroB
 
 
-class Fanuc(Dialect):
+class Fanuc(MacroB):
     """Fanuc Macro B G-code."""
 
     NAME: ClassVar[str] = "fanuc"
     EXTENSION: ClassVar[str] = ".nc"
     LINE_LENGTH: ClassVar[int] = 80
-    RUNTIME_VARIABLES: ClassVar[bool] = True
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
     """The G code for each unit system."""
-    DPRNT_FORMAT: ClassVar[dict[str, str]] = {"mm": "44", "inch": "35"}
-    """Integer and fraction digits of printed positions (``#5061[44]``)."""
-    RADIUS_WEAR_FACTOR: ClassVar[float] = 1.0
-    """What a radius correction is multiplied by in ``G10 L13`` (Fanuc memory C: the D
-    offset is a radius)."""
-    CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
-    """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
-    skip did not fire: the end point itself is rounded to the least input increment."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.vars: dict[str, int] = {}
-        self.base = 100
-        self.label = 1000
-
-    # -- values -----------------------------------------------------------------
-    def var(self, name: str) -> str:
-        """The ``#n`` holding run-time value ``name`` (allocated on first use)."""
-        if name not in self.vars:
-            if len(self.vars) >= SCRATCH:
-                raise self.unsupported(ir.Var(name), f"more than {SCRATCH} run-time values")
-            self.vars[name] = self.base + len(self.vars)
-        return f"#{self.vars[name]}"
-
-    def expr(self, c: ir.Coord) -> str:
-        """A coordinate as a Macro B expression (no outer brackets)."""
-        e = self.sum_expr(c)
-        return self.length(c) if e is None else e  # type: ignore[arg-type]
-
-    def addr(self, c: ir.Coord) -> str:
-        """A coordinate as an address value: a number, ``#n`` or ``[expression]``."""
-        e = self.expr(c)
-        return e if not isinstance(c, ir.Var) or "+" not in e and "-" not in e else f"[{e}]"
-
-    def scratch(self, k: int) -> str:
-        """Scratch variable ``k`` (0-2 targets, 3 the check sum)."""
-        return f"#{self.base + SCRATCH + k}"
-
-    def next_label(self) -> int:
-        """A fresh block number for a forward GOTO."""
-        self.label += 1
-        return self.label
-
-    def feed(self, mm_per_min: float) -> str:
-        """A feed in program units per minute, with the decimal point Fanuc wants."""
-        return self.num(self.scale(mm_per_min), 0) + "."
 
     # -- lowering -----------------------------------------------------------------
     def lower(self, program: ir.Program) -> dict[str, Any]:

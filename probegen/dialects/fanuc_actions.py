@@ -23,12 +23,8 @@ the angle in a common variable.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
+from probegen.dialects.macro_b import MacroB
 from probegen.ir.actions import Align, Check, SetWorkOffset, UpdateTool, result
-
-if TYPE_CHECKING:
-    from probegen.dialects.fanuc import Fanuc
 
 OUT_OF_TOLERANCE_ALARM = 10
 """``#3000`` number of an out-of-tolerance feature (alarm 3010)."""
@@ -42,7 +38,7 @@ TOOL_LINE = {"radius": 13, "length": 11}
 """G10 L number of each wear offset (memory C: L11 H wear, L13 D wear)."""
 
 
-def lower_action(d: Fanuc, node: Check | SetWorkOffset | UpdateTool | Align) -> list[str]:
+def lower_action(d: MacroB, node: Check | SetWorkOffset | UpdateTool | Align) -> list[str]:
     """The Macro B lines of one action node."""
     if isinstance(node, Check):
         return _Checker(d, node).lines()
@@ -56,7 +52,7 @@ def lower_action(d: Fanuc, node: Check | SetWorkOffset | UpdateTool | Align) -> 
 class _Checker:
     """Builds the lines of one ``Check``."""
 
-    def __init__(self, d: Fanuc, node: Check) -> None:
+    def __init__(self, d: MacroB, node: Check) -> None:
         self.d, self.node = d, node
         self.out: list[str] = [f"(CHECK {node.feature} {node.fit.upper()} "
                                f"{len(node.points)} POINTS)"]
@@ -227,7 +223,7 @@ class _Checker:
                   f"{stop}({n.feature} OUT OF TOL)", f"N{label}")
 
 
-def minus(d: Fanuc, value: float, decimals: int | None = None) -> str:
+def minus(d: MacroB, value: float, decimals: int | None = None) -> str:
     """Text that subtracts ``value`` (a length in mm, or a plain number with
     ``decimals``): ``-v``, ``+|v|`` for a negative one, nothing when it prints as 0."""
     text = d.length(abs(value)) if decimals is None else d.num(abs(value), decimals)
@@ -247,7 +243,7 @@ def offset_words(name: str) -> tuple[str, int]:
     return f"L2 P{k + 1}", 5221 + 20 * k
 
 
-def work_offset(d: Fanuc, node: SetWorkOffset) -> list[str]:
+def work_offset(d: MacroB, node: SetWorkOffset) -> list[str]:
     """``G10`` writing the running offset plus each measured shift into ``node.offset``,
     one block per axis (the others keep their values)."""
     words, _ = offset_words(node.offset)
@@ -258,7 +254,7 @@ def work_offset(d: Fanuc, node: SetWorkOffset) -> list[str]:
                     f"{minus(d, nominal)}]" for i, name, nominal in node.shifts)]
 
 
-def update_tool(d: Fanuc, node: UpdateTool) -> list[str]:
+def update_tool(d: MacroB, node: UpdateTool) -> list[str]:
     """The wear correction with its dead band and maximum."""
     c = d.var(result(node.feature, "C"))
     skip, ok = d.next_label(), d.next_label()
@@ -279,13 +275,13 @@ def update_tool(d: Fanuc, node: UpdateTool) -> list[str]:
     ]
 
 
-def _wear(d: Fanuc, node: UpdateTool, c: str) -> str:
+def _wear(d: MacroB, node: UpdateTool, c: str) -> str:
     """The G10 R value: the correction, doubled where the D offset is a diameter."""
     k = d.RADIUS_WEAR_FACTOR if node.offset == "radius" else 1.0
     return c if k == 1.0 else f"[{d.num(k, 1)}*{c}]"
 
 
-def align(d: Fanuc, node: Align) -> list[str]:
+def align(d: MacroB, node: Align) -> list[str]:
     """Store the angle and/or rotate with G68 about the centre."""
     a = d.var(node.angle)
     out = [f"(ALIGN FROM {node.feature})"]

@@ -14,7 +14,8 @@ import dataclasses
 from typing import Any, ClassVar
 
 from probegen import ir
-from probegen.dialects.fanuc import SCRATCH, Fanuc
+from probegen.dialects.fanuc import Fanuc
+from probegen.dialects.macro_b import SCRATCH
 from probegen.errors import UnsupportedError
 from probegen.ir.actions import describe
 

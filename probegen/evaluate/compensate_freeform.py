@@ -42,21 +42,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.errors import ProbegenError
-from probegen.geometry.frames import FloatArray, orthonormal_basis, unit
+from probegen.geometry.frames import FloatArray
+from probegen.geometry.freeform_offsets import (
+    DEGENERATE,
+    DOWN,
+    finite_rows,
+    travel_direction,
+)
 from probegen.machine.calibration import ProbeCalibration, compensate
-
-DOWN = (0.0, 0.0, -1.0)
-"""Probing straight down (−Z), the seed's 3-axis setting."""
-
-TWO_D_SPACING = 0.5
-"""Default offset of the 2-D method's extra touches along the slope, mm (the seed's 0.5)."""
-
-MICRO_PLANE_RADIUS = 0.5
-"""Default radius of the micro-plane circle, mm: the top of the seed's 0.05–0.5 mm range,
-which divides the noise amplification ``σ/ρ`` most."""
-
-DEGENERATE = 1e-12
-"""A cross product (mm²) or a chord (mm) shorter than this cannot give a normal."""
 
 COLLINEAR = 1e-12
 """Point sets whose second principal variance is below this fraction of the first are
@@ -87,21 +80,6 @@ class Compensated:
     normals: FloatArray
 
 
-def _rows(values: ArrayLike, shape: tuple[int, ...], what: str) -> FloatArray:
-    """``values`` as a finite float array of ``shape`` (``-1`` = any count)."""
-    try:
-        array = np.asarray(values, dtype=np.float64).reshape(shape)
-    except (TypeError, ValueError) as exc:
-        raise ProbegenError(f"{what}: expected an array of shape {shape}, {exc}") from None
-    if not np.all(np.isfinite(array)):
-        raise ProbegenError(f"{what}: expected finite numbers, found NaN or infinity")
-    return array
-
-
-def _direction(probe_direction: ArrayLike) -> FloatArray:
-    return unit(probe_direction, what="probe direction")
-
-
 def _outward(normals: FloatArray, d: FloatArray) -> FloatArray:
     """Unit normals turned to point against the travel ``d``."""
     flip = np.where(normals @ d > 0.0, -1.0, 1.0)
@@ -117,8 +95,8 @@ def naive(centres: ArrayLike, radius: Radius, *,
     along the normal and ``r·sin θ`` along the surface, for any curvature: 45 µm at 10°
     with a 3 mm ball, 1.5 mm at 60°.  Kept as the baseline the others are measured against.
     """
-    o = _rows(centres, (-1, 3), "naive: centres")
-    d = _direction(probe_direction)
+    o = finite_rows(centres, (-1, 3), "naive: centres")
+    d = travel_direction(probe_direction)
     normals = np.broadcast_to(-d, o.shape).copy()
     return Compensated("naive", compensate(o, normals, radius), normals)
 
@@ -139,13 +117,13 @@ def two_d(centres: ArrayLike, pairs: ArrayLike, radius: Radius, *,
     Args:
         centres: ``(m, 3)`` ball centres of the touches at the guide points.
         pairs: ``(m, 2, 3)`` ball centres of the two extra touches of each point (either
-            order), e.g. at the guide point ∓/± ``two_d_offsets``.
+            order), e.g. at the guide point ∓/± ``freeform_offsets.two_d_offsets``.
         radius: effective ball radius, mm, or a calibration.
         probe_direction: travel direction of all the touches.
     """
-    o = _rows(centres, (-1, 3), "2-D: centres")
-    pair = _rows(pairs, (len(o), 2, 3), "2-D: extra touches")
-    d = _direction(probe_direction)
+    o = finite_rows(centres, (-1, 3), "2-D: centres")
+    pair = finite_rows(pairs, (len(o), 2, 3), "2-D: extra touches")
+    d = travel_direction(probe_direction)
     chord = pair[:, 1] - pair[:, 0]
     tangent = _unit_rows(chord, "2-D: the two extra touches coincide")
     up = -d - np.outer(tangent @ -d, 1.0) * tangent
@@ -172,16 +150,16 @@ def micro_plane(centres: ArrayLike, touches: ArrayLike, radius: Radius, *,
     Args:
         centres: ``(m, 3)`` ball centres of the touches at the guide points.
         touches: ``(m, k, 3)``, ``k >= 3``, ball centres of the extra touches of each point,
-            e.g. at the guide point + ``micro_plane_offsets``.
+            e.g. at the guide point + ``freeform_offsets.micro_plane_offsets``.
         radius: effective ball radius, mm, or a calibration.
         probe_direction: travel direction of all the touches (orients the normal).
     """
-    o = _rows(centres, (-1, 3), "micro-plane: centres")
-    tri = _rows(touches, (len(o), -1, 3), "micro-plane: extra touches")
+    o = finite_rows(centres, (-1, 3), "micro-plane: centres")
+    tri = finite_rows(touches, (len(o), -1, 3), "micro-plane: extra touches")
     if tri.shape[1] < 3:
         raise ProbegenError(f"micro-plane: expected at least 3 extra touches per point, "
                             f"found {tri.shape[1]}")
-    d = _direction(probe_direction)
+    d = travel_direction(probe_direction)
     if tri.shape[1] == 3:
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         normals = _unit_rows(cross, "micro-plane: the three extra touches are collinear")
@@ -217,8 +195,8 @@ def vector(centres: ArrayLike, nominal_normals: ArrayLike, radius: Radius) -> Co
         nominal_normals: ``(m, 3)`` nominal outward unit normals (the probing axes).
         radius: effective ball radius, mm, or a calibration.
     """
-    o = _rows(centres, (-1, 3), "vector: centres")
-    n = _unit_rows(_rows(nominal_normals, (len(o), 3), "vector: nominal normals"),
+    o = finite_rows(centres, (-1, 3), "vector: centres")
+    n = _unit_rows(finite_rows(nominal_normals, (len(o), 3), "vector: nominal normals"),
                    "vector: a nominal normal is zero")
     return Compensated("vector", compensate(o, n, radius), n)
 
@@ -231,56 +209,6 @@ def _unit_rows(vectors: FloatArray, problem: str) -> FloatArray:
         raise ProbegenError(f"{problem} at point {int(bad[0])} (length "
                             f"{length[bad[0]]:.3g} mm); cannot estimate the normal")
     return np.asarray(vectors / length[:, None])
-
-
-def slope_directions(nominal_normals: ArrayLike, *,
-                     probe_direction: ArrayLike = DOWN) -> FloatArray:
-    """Unit direction of steepest slope ⟂ ``d`` at each point: the normal's part ⟂ ``d``.
-
-    Where the normal is parallel to ``d`` (no slope) the first axis of
-    ``orthonormal_basis(d)`` is used (+X probing down).  Returns ``(m, 3)``.
-    """
-    n = _rows(nominal_normals, (-1, 3), "slope directions: normals")
-    d = _direction(probe_direction)
-    across = n - np.outer(n @ d, d)
-    length = np.linalg.norm(across, axis=1)
-    fallback = orthonormal_basis(d)[0]
-    flat = length < DEGENERATE
-    out = np.where(flat[:, None], fallback, across / np.where(flat, 1.0, length)[:, None])
-    return np.asarray(out)
-
-
-def two_d_offsets(nominal_normals: ArrayLike, *, spacing: float = TWO_D_SPACING,
-                  probe_direction: ArrayLike = DOWN) -> FloatArray:
-    """Where the 2-D method's extra touches go: ``(m, 2, 3)`` offsets ``∓spacing·slope``.
-
-    Add them to the guide points (or guide-line origins); probe along the same ``d``.
-    """
-    if not (math.isfinite(spacing) and spacing > 0.0):
-        raise ProbegenError(f"2-D spacing: expected a positive length in mm, found {spacing!r}")
-    s = slope_directions(nominal_normals, probe_direction=probe_direction)
-    return np.asarray(np.stack([-spacing * s, spacing * s], axis=1))
-
-
-def micro_plane_offsets(*, radius: float = MICRO_PLANE_RADIUS, count: int = 3,
-                        phase: float = 0.0, probe_direction: ArrayLike = DOWN) -> FloatArray:
-    """Where the micro-plane touches go: ``(count, 3)`` offsets on a circle ⟂ ``d``.
-
-    Args:
-        radius: circle radius ``ρ``, mm (the seed uses 0.05–0.5 mm).
-        count: touches, equally spaced (3: the seed; 4 cancels the quadratic aliasing).
-        phase: angle of the first touch from the first axis of ``orthonormal_basis(d)``, rad.
-        probe_direction: travel direction ``d``.
-    """
-    if not (math.isfinite(radius) and radius > 0.0):
-        raise ProbegenError(f"micro-plane radius: expected a positive length in mm, found "
-                            f"{radius!r}")
-    if isinstance(count, bool) or not isinstance(count, int) or count < 3:
-        raise ProbegenError(f"micro-plane touches: expected an integer >= 3, found {count!r}")
-    basis = orthonormal_basis(_direction(probe_direction))
-    angles = phase + np.arange(count) * 2.0 * math.pi / count
-    return np.asarray(radius * (np.outer(np.cos(angles), basis[0])
-                                + np.outer(np.sin(angles), basis[1])))
 
 
 def normal_error_limit(radius: float, allowed: float) -> float:
@@ -355,8 +283,8 @@ def deviation_map(compensated: Compensated, nominal_points: ArrayLike,
         nominal_normals: ``(m, 3)`` nominal outward normals at ``P_t`` (normalised here).
     """
     m = len(compensated.contacts)
-    p = _rows(nominal_points, (m, 3), "deviation map: nominal points")
-    n = _unit_rows(_rows(nominal_normals, (m, 3), "deviation map: nominal normals"),
+    p = finite_rows(nominal_points, (m, 3), "deviation map: nominal points")
+    n = _unit_rows(finite_rows(nominal_normals, (m, 3), "deviation map: nominal normals"),
                    "deviation map: a nominal normal is zero")
     e = np.einsum("ij,ij->i", compensated.contacts - p, n)
     return DeviationMap(compensated.method, p, n, compensated.contacts, e)

@@ -35,9 +35,7 @@ from probegen.evaluate.characteristics import (
     NOT_EVALUATED,
     Evaluated,
     NotEvaluated,
-    SphereTestResult,
     accepted,
-    evaluate_sphere_test,
     run_status,
     status_of,
 )
@@ -50,6 +48,7 @@ from probegen.evaluate.freeform import (
 )
 from probegen.evaluate.planar import PlanarResult, evaluate_planar
 from probegen.evaluate.revolved import MIN_SECTIONS, Nominal, RevolvedResult, evaluate_revolved
+from probegen.evaluate.sphere_test import SphereTestResult, evaluate_sphere_test
 from probegen.geometry.fits_solver import vec3
 from probegen.geometry.uncertainty import COVERAGE_FACTOR, Budget, few_dof_note
 from probegen.machine.calibration import ProbeCalibration, calibration_state, compensate, for_stylus

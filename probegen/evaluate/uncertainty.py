@@ -20,11 +20,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from probegen.evaluate.characteristics import Characteristic
 from probegen.geometry.frames import rotation_to_z
 from probegen.geometry.uncertainty import (
     Budget,
@@ -35,9 +35,6 @@ from probegen.geometry.uncertainty import (
     magnitude_u,
     propagate,
 )
-
-if TYPE_CHECKING:
-    from probegen.evaluate.characteristics import Characteristic
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -40,12 +40,15 @@ from typing import Any, Literal
 import numpy as np
 
 from probegen import ir
-from probegen.results.dprnt_records import IDENTITY_DIGITS
 
 Vec3 = tuple[float, float, float]
 
 IDENTITY_PREFIX = "H"
 """The letter before the hex digits of the identity token (``H3F09A2C1``)."""
+
+IDENTITY_DIGITS = 8
+"""Hex digits of the program identity on ``PGSTART`` (``H`` and 8 digits: the first 32
+bits of the SHA-256 of the program's canonical content)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True)

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from probegen import ir
-from probegen.evaluate.compensate_freeform import micro_plane_offsets, two_d_offsets
 from probegen.geometry.frames import FloatArray
+from probegen.geometry.freeform_offsets import micro_plane_offsets, two_d_offsets
 from probegen.geometry.offset_surface import ParamSurface, ball_centres
 from probegen.spec.model import FREEFORM_EXTRA as EXTRA_TOUCHES
 from probegen.spec.model import FREEFORM_STRIDE as INDEX_STRIDE
@@ -94,7 +94,7 @@ def guide_lines(points: FloatArray, normals: FloatArray, d: FloatArray, method: 
     """Origins of every guide line: (m, 3), with the guide row (m,) and role (m,) of each.
 
     The extra lines sit where :mod:`probegen.evaluate.compensate_freeform` expects them
-    (``two_d_offsets``, ``micro_plane_offsets``), so plan and compensation agree.
+    (:mod:`probegen.geometry.freeform_offsets`), so plan and compensation agree.
 
     Args:
         points: (n, 3) guide points.

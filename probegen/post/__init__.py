@@ -3,7 +3,8 @@
 ``probegen post`` (see ``docs/post.md``):
 
 * :mod:`probegen.post.frontend`: the DMIS program → ``ir.Program`` (the planner's IR),
-  every move cleared by the collision check, plus the touch list of the feature map;
+  every move cleared by the collision check, plus the touch list of the feature map
+  (both in :mod:`probegen.post.posted`);
 * :mod:`probegen.post.featuremap`: ``program.features.json``, what the evaluation needs
   to know of the posted program (the DMIS text as run, every touch with its DMIS
   feature, line and probing line);

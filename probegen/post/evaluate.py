@@ -32,7 +32,8 @@ from probegen.dmis.reader import parse_dmis
 from probegen.errors import IncompleteRunError, ResultsParseError
 from probegen.ir.identity import PlannedTouch, map_identity
 from probegen.machine.calibration import ProbeCalibration, calibrated_centres, for_stylus
-from probegen.post.featuremap import FeatureMap, PostTouch, read_feature_map
+from probegen.post.featuremap import FeatureMap, read_feature_map
+from probegen.post.posted import PostTouch
 from probegen.results.dprnt import DprntLog, read_dprnt
 from probegen.results.logcheck import check_log
 from probegen.sim.cmm.features import DmisFeature, arr, vec3

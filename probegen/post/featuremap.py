@@ -22,41 +22,14 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from probegen.dmis.reader import logical_statements
 from probegen.errors import ResultsParseError
-
-if TYPE_CHECKING:
-    from probegen.post.frontend import PostedProgram
-
-Vec3 = tuple[float, float, float]
+from probegen.post.posted import PostedProgram, PostTouch
 
 FORMAT = "probegen-post-features"
 VERSION = 1
-
-
-@dataclass(frozen=True, slots=True)
-class PostTouch:
-    """One posted touch, as the feature map records it.
-
-    Attributes:
-        feature: the DMIS feature name (``A_CIRCLE``).
-        id: the id printed in the log (``ACIRCLE``).
-        index: 1-based touch index within the feature.
-        line: the PTMEAS line.
-        start: approach point (ball centre), work coordinates, mm.
-        direction: unit probing direction (into the material).
-        reach: longest probing travel (APPRCH + SEARCH), mm.
-    """
-
-    feature: str
-    id: str
-    index: int
-    line: int
-    start: Vec3
-    direction: Vec3
-    reach: float
 
 
 @dataclass(frozen=True, slots=True)

@@ -43,7 +43,7 @@ from probegen.geometry.frames import FloatArray
 from probegen.machine.profile import MachineProfile
 from probegen.planning import setup_for
 from probegen.planning.collision import Obstacle, SegmentClearance, check_program
-from probegen.post.featuremap import PostTouch
+from probegen.post.posted import PostedProgram, PostTouch
 from probegen.sim.cmm.features import arr, vec3
 from probegen.sim.cmm.interpreter import SkippedStatement, execute_statement, record_skipped
 from probegen.sim.cmm.state import NotExecutable, VmState
@@ -64,35 +64,6 @@ ID_LENGTH = 16
 MIN_APPROACH = 0.1
 """Shortest APPRCH (mm) a touch may start from: a G31 must travel before it triggers."""
 _MOTION = frozenset({"GOTO", "PTMEAS"})
-
-
-@dataclass(frozen=True, slots=True)
-class PostedProgram:
-    """The front end's result.
-
-    Attributes:
-        program: the IR, ready for a dialect.
-        touches: every touch in program order.
-        skipped: statements left out (``skip_unsupported``), in line order.
-        rerouted: lines of positioning moves lifted over the clearance plane.
-        segments: the collision check's figures (empty without an obstacle).
-        dropped_lines: lines of skipped statements the interpreter would execute (a
-            sensor the machine does not have): the evaluation runs without them.
-    """
-
-    program: ir.Program
-    touches: tuple[PostTouch, ...]
-    skipped: tuple[SkippedStatement, ...]
-    rerouted: tuple[int, ...]
-    segments: tuple[SegmentClearance, ...]
-    dropped_lines: tuple[int, ...]
-
-    @property
-    def move_clearance(self) -> float:
-        """The smallest clearance above the margin (mm) of a positioning move (touches
-        reach the margin by design), infinite when nothing was checked."""
-        return min((min(s.ball, s.shank) for s in self.segments
-                    if not s.kind.startswith("touch")), default=float("inf"))
 
 
 class _Recorder:

@@ -40,8 +40,9 @@ from probegen.qif.document import (
 )
 
 if TYPE_CHECKING:
-    from probegen.evaluate.characteristics import Characteristic, SphereTestResult
+    from probegen.evaluate.characteristics import Characteristic
     from probegen.evaluate.ingest import Ingested
+    from probegen.evaluate.sphere_test import SphereTestResult
     from probegen.spec.model import Spec
 
 STANDARD = ("ISO", "ISO 10360-5", "Acceptance and reverification tests for coordinate "
@@ -109,7 +110,7 @@ def _spheres(ing: Ingested) -> list[tuple[SphereTestResult, bool]]:
     """The sphere tests to write, each with whether it was evaluated completely (a NOT
     EVALUATED one is written when its touches sufficed for a fit, its toleranced
     characteristics NOT_ANALYZED)."""
-    from probegen.evaluate.characteristics import SphereTestResult
+    from probegen.evaluate.sphere_test import SphereTestResult
 
     partial = [n.partial for n in ing.not_evaluated if isinstance(n.partial, SphereTestResult)]
     return [(r, True) for r in ing.results] + [(r, False) for r in partial]

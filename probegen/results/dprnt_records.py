@@ -17,13 +17,10 @@ from dataclasses import dataclass
 from typing import Literal
 
 from probegen.errors import Diagnostic
+from probegen.ir.identity import IDENTITY_DIGITS
 
 FORMAT_VERSION = 1
 """The log format version this reader understands (the ``V1`` of ``PGSTART``)."""
-
-IDENTITY_DIGITS = 8
-"""Hex digits of the program identity on ``PGSTART`` (``H`` and 8 digits: 32 bits of a
-SHA-256, see :mod:`probegen.planning.identity`)."""
 
 MAX_FEATURE_ID = 16
 """Longest feature id the Fanuc dialect prints."""

@@ -42,7 +42,6 @@ from __future__ import annotations
 import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
@@ -70,7 +69,7 @@ from probegen.sim.cmm.features import (
 )
 from probegen.sim.cmm.measure import do_feat, do_meas, do_tol
 from probegen.sim.cmm.output import echo, feature_text, tolerance_text
-from probegen.sim.cmm.state import DmisProgramError, MeasBlock, NotExecutable, VmState
+from probegen.sim.cmm.state import Cmm, DmisProgramError, MeasBlock, NotExecutable, VmState
 from probegen.sim.cmm.tolerances import ToleranceResult, evaluate
 
 __all__ = [
@@ -101,31 +100,6 @@ NO_OPS = frozenset({
 
 _IN_MEAS = frozenset({"GOTO", "PTMEAS", "ENDMES"}) | NO_OPS
 """Statements allowed between MEAS and ENDMES."""
-
-
-class Cmm(Protocol):
-    """The machine the virtual CMM drives (coordinates: machine, mm, ball centre)."""
-
-    @property
-    def ball_radius(self) -> float:
-        """Radius of the physical stylus ball (mm)."""
-        ...
-
-    def move(self, start: Vec3, end: Vec3) -> None:
-        """Move the ball centre straight from ``start`` to ``end``.
-
-        Raises:
-            SimAlarm: the ball meets the part on the way.
-        """
-        ...
-
-    def probe(self, start: Vec3, direction: Vec3, distance: float) -> Vec3 | None:
-        """Move from ``start`` along the unit ``direction`` up to ``distance``.
-
-        Returns:
-            The ball centre where the ball touched the part, or None.
-        """
-        ...
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,4 +1,5 @@
-"""The mutable state of one DMIS run and the helpers every statement handler shares.
+"""The machine a DMIS run drives (the :class:`Cmm` protocol), the mutable state of one
+run and the helpers every statement handler shares.
 
 Handlers read parameters through the helpers here, which raise
 
@@ -12,7 +13,7 @@ Handlers read parameters through the helpers here, which raise
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -20,12 +21,9 @@ from probegen.constants import MM_PER_INCH
 from probegen.dmis.reader import Call, Expr, Label, Param, Statement, format_param
 from probegen.errors import ProbegenError
 from probegen.geometry.frames import FloatArray
-from probegen.sim.cmm.features import Compensation, DmisFeature
+from probegen.sim.cmm.features import Compensation, DmisFeature, Vec3
 from probegen.sim.cmm.frames import Frame
 from probegen.sim.cmm.tolerances import Tolerance, ToleranceResult
-
-if TYPE_CHECKING:
-    from probegen.sim.cmm.interpreter import Cmm
 
 DEFAULT_APPROACH = 5.0
 """SNSET/APPRCH (mm) until the program sets one."""
@@ -35,6 +33,31 @@ DEFAULT_RETRACT = 5.0
 
 DEFAULT_SEARCH = 5.0
 """SNSET/SEARCH (mm) until the program sets one."""
+
+
+class Cmm(Protocol):
+    """The machine the virtual CMM drives (coordinates: machine, mm, ball centre)."""
+
+    @property
+    def ball_radius(self) -> float:
+        """Radius of the physical stylus ball (mm)."""
+        ...
+
+    def move(self, start: Vec3, end: Vec3) -> None:
+        """Move the ball centre straight from ``start`` to ``end``.
+
+        Raises:
+            SimAlarm: the ball meets the part on the way.
+        """
+        ...
+
+    def probe(self, start: Vec3, direction: Vec3, distance: float) -> Vec3 | None:
+        """Move from ``start`` along the unit ``direction`` up to ``distance``.
+
+        Returns:
+            The ball centre where the ball touched the part, or None.
+        """
+        ...
 
 
 class DmisProgramError(ProbegenError):

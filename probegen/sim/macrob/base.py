@@ -1,4 +1,6 @@
-"""Settings of the virtual Fanuc control and the alarms its Macro B interpreter raises.
+"""Settings of the virtual Fanuc control, the alarms its Macro B interpreter raises and
+the :class:`Machine` protocol: the kinematics and part the control drives (what
+``execute``, ``motion`` and ``machine`` all share).
 
 Alarm numbers follow the Fanuc 0i-F program (PS) alarm list where one fits; alarms
 only the virtual machine raises (a limit of the simulation, not of the program) are
@@ -10,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from probegen.sim.alarms import SimAlarm
 
@@ -101,3 +104,41 @@ class Settings:
     max_macro_nesting: int = 5
     g_aliases: Mapping[float, float] = field(default_factory=dict)
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+Point = tuple[float, float, float]
+"""A position in machine coordinates, mm."""
+
+
+class Machine(Protocol):
+    """The machine and part the control drives; every position is in machine
+    coordinates, mm (the interpreter converts work coordinates, offsets, tool length
+    and inch before calling).
+
+    Each method may raise :class:`SimAlarm` (for instance a collision on a rapid or
+    feed move); the run then stops with that alarm at the current program line.  A run
+    starts at machine zero ``(0, 0, 0)`` (the reference position); moves that go
+    nowhere are not passed on, G31 moves always are.
+    """
+
+    def rapid(self, start: Point, end: Point) -> None:
+        """A G0 (or G28/G53) move from ``start`` to ``end``."""
+        ...
+
+    def feed(self, start: Point, end: Point, feed_mm_min: float) -> None:
+        """A G1 move at ``feed_mm_min``."""
+        ...
+
+    def skip(self, start: Point, end: Point, feed_mm_min: float) -> Point | None:
+        """A G31 move: return where the skip signal fired, or None if it never did."""
+        ...
+
+
+class RotaryMachine(Machine, Protocol):
+    """A machine with rotary axes: the control also calls :meth:`rotate` (a machine
+    without the method makes B and C words raise alarm 9010)."""
+
+    def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        """Turn the rotary axes from ``start`` to ``end`` (machine angles by axis letter,
+        deg; linear in angle, C possibly past 360) with the linear axes at ``at``."""
+        ...

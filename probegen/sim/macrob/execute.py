@@ -40,6 +40,7 @@ from probegen.sim.macrob.base import (
     PROGRAM_NOT_FOUND,
     SEQUENCE_NOT_FOUND,
     WRITE_PROTECTED,
+    Machine,
     Settings,
     alarm,
 )
@@ -58,8 +59,6 @@ from probegen.sim.macrob.variables import Store
 
 if TYPE_CHECKING:
     from collections.abc import Callable
-
-    from probegen.sim.macrob.machine import Machine
 
 ARGUMENTS = {"A": 1, "B": 2, "C": 3, "D": 7, "E": 8, "F": 9, "H": 11, "M": 13, "Q": 17,
              "R": 18, "S": 19, "T": 20, "U": 21, "V": 22, "W": 23, "X": 24, "Y": 25, "Z": 26}

@@ -11,7 +11,7 @@ how it stopped and its variables::
     result.alarm        # Alarm(number, message, line, source) or None
     result.output       # POPEN "%" line, DPRNT lines, PCLOS "%" line
 
-Conventions (details in the module docstrings of ``probegen.sim.macrob_*``):
+Conventions (details in the module docstrings of ``probegen.sim.macrob.*``):
 
 * Output: POPEN and PCLOS each send a line ``%``; every DPRNT line ends with LF
   (``Settings.dprnt_eol``; real controls send LF or CR LF per I/O parameter).  DPRNT
@@ -36,16 +36,12 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
 
 from probegen.results.gcpause import collector_paused
 from probegen.sim.alarms import SimAlarm
-from probegen.sim.macrob.base import Settings
+from probegen.sim.macrob.base import Machine, Point, RotaryMachine, Settings
 from probegen.sim.macrob.execute import Interpreter
 from probegen.sim.macrob.parse import parse_program
-
-Point = tuple[float, float, float]
-"""A position in machine coordinates, mm."""
 
 __all__ = [
     "Alarm",
@@ -58,40 +54,6 @@ __all__ = [
     "SimAlarm",
     "run_program",
 ]
-
-
-class Machine(Protocol):
-    """The machine and part the control drives; every position is in machine
-    coordinates, mm (the interpreter converts work coordinates, offsets, tool length
-    and inch before calling).
-
-    Each method may raise :class:`SimAlarm` (for instance a collision on a rapid or
-    feed move); the run then stops with that alarm at the current program line.  A run
-    starts at machine zero ``(0, 0, 0)`` (the reference position); moves that go
-    nowhere are not passed on, G31 moves always are.
-    """
-
-    def rapid(self, start: Point, end: Point) -> None:
-        """A G0 (or G28/G53) move from ``start`` to ``end``."""
-        ...
-
-    def feed(self, start: Point, end: Point, feed_mm_min: float) -> None:
-        """A G1 move at ``feed_mm_min``."""
-        ...
-
-    def skip(self, start: Point, end: Point, feed_mm_min: float) -> Point | None:
-        """A G31 move: return where the skip signal fired, or None if it never did."""
-        ...
-
-
-class RotaryMachine(Machine, Protocol):
-    """A machine with rotary axes: the control also calls :meth:`rotate` (a machine
-    without the method makes B and C words raise alarm 9010)."""
-
-    def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
-        """Turn the rotary axes from ``start`` to ``end`` (machine angles by axis letter,
-        deg; linear in angle, C possibly past 360) with the linear axes at ``at``."""
-        ...
 
 
 class FreeMachine:

@@ -49,7 +49,6 @@ Rotary axes (a five-axis B/C machine: B the 4th axis, C the 5th), in degrees:
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from probegen.sim.macrob.base import (
     FEED_ZERO,
@@ -57,6 +56,8 @@ from probegen.sim.macrob.base import (
     ILLEGAL_OFFSET,
     IMPROPER_G_CODE,
     UNSUPPORTED,
+    Machine,
+    Point,
     Settings,
     alarm,
 )
@@ -73,10 +74,6 @@ from probegen.sim.macrob.variables import (
     unknown,
 )
 
-if TYPE_CHECKING:
-    from probegen.sim.macrob.machine import Machine
-
-Point = tuple[float, float, float]
 Word = tuple[str, float, bool]
 """An evaluated word: letter, value, and whether it was an integer literal (``X10``)."""
 

@@ -1,0 +1,70 @@
+"""The values of a Fanuc Macro B program: common variables, block labels, feeds.
+
+What the Fanuc dialect (``dialects/fanuc.py``, and Haas through it) and its in-process
+decisions (``dialects/fanuc_actions.py``) both use: run-time values live in common
+variables from the profile's ``variable_base`` (``#100`` by default), named values from
+base+0, scratch at base+90..base+93; forward GOTOs jump to fresh block numbers from
+N1001; feeds are printed in program units per minute with a decimal point.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from probegen import ir
+from probegen.constants import tol
+from probegen.dialects.base import Dialect
+
+SCRATCH = 90
+"""Offset of the scratch variables (three targets and one check sum) from the base."""
+
+
+class MacroB(Dialect):
+    """A Macro B dialect's values and print formats (not a dialect by itself: no ``NAME``)."""
+
+    RUNTIME_VARIABLES: ClassVar[bool] = True
+    DPRNT_FORMAT: ClassVar[dict[str, str]] = {"mm": "44", "inch": "35"}
+    """Integer and fraction digits of printed positions (``#5061[44]``)."""
+    RADIUS_WEAR_FACTOR: ClassVar[float] = 1.0
+    """What a radius correction is multiplied by in ``G10 L13`` (Fanuc memory C: the D
+    offset is a radius)."""
+    CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
+    """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
+    skip did not fire: the end point itself is rounded to the least input increment."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.vars: dict[str, int] = {}
+        self.base = 100
+        self.label = 1000
+
+    def var(self, name: str) -> str:
+        """The ``#n`` holding run-time value ``name`` (allocated on first use)."""
+        if name not in self.vars:
+            if len(self.vars) >= SCRATCH:
+                raise self.unsupported(ir.Var(name), f"more than {SCRATCH} run-time values")
+            self.vars[name] = self.base + len(self.vars)
+        return f"#{self.vars[name]}"
+
+    def expr(self, c: ir.Coord) -> str:
+        """A coordinate as a Macro B expression (no outer brackets)."""
+        e = self.sum_expr(c)
+        return self.length(c) if e is None else e  # type: ignore[arg-type]
+
+    def addr(self, c: ir.Coord) -> str:
+        """A coordinate as an address value: a number, ``#n`` or ``[expression]``."""
+        e = self.expr(c)
+        return e if not isinstance(c, ir.Var) or "+" not in e and "-" not in e else f"[{e}]"
+
+    def scratch(self, k: int) -> str:
+        """Scratch variable ``k`` (0-2 targets, 3 the check sum)."""
+        return f"#{self.base + SCRATCH + k}"
+
+    def next_label(self) -> int:
+        """A fresh block number for a forward GOTO."""
+        self.label += 1
+        return self.label
+
+    def feed(self, mm_per_min: float) -> str:
+        """A feed in program units per minute, with the decimal point Fanuc wants."""
+        return self.num(self.scale(mm_per_min), 0) + "."
