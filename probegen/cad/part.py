@@ -32,6 +32,7 @@ T = TypeVar("T")
 class Part:
     """A loaded part model and what is derived from it, each built once on first use.
 
+    Build it with :func:`load_part` (or ``Part(model)`` around a model already loaded).
     Equality and hashing are by identity: two loads of one file are two parts.
 
     Attributes:
@@ -40,15 +41,6 @@ class Part:
 
     model: Model
     _memo: dict[Hashable, Any] = field(default_factory=dict, init=False, repr=False)
-
-    @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Part:
-        """Read the STEP file ``path`` (:func:`probegen.cad.load_step`).
-
-        Raises:
-            ModelError: the file is missing, not STEP, corrupt or holds no faces.
-        """
-        return cls(load_step(path))
 
     @property
     def path(self) -> str:
@@ -93,5 +85,12 @@ class Part:
 
 
 def load_part(path: str | os.PathLike[str]) -> Part:
-    """Load the part model at ``path`` once (:meth:`Part.load`)."""
-    return Part.load(path)
+    """Read the STEP file ``path`` into a :class:`Part` (:func:`probegen.cad.load_step`).
+
+    Load it once, at the top (the command, or a public entry given a spec), and hand the
+    part down.
+
+    Raises:
+        ModelError: the file is missing, not STEP, corrupt or holds no faces.
+    """
+    return Part(load_step(path))
