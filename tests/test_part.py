@@ -48,6 +48,22 @@ def test_compile_loads_and_meshes_the_model_once(spec: str, tmp_path: Path,
     assert len(list(tmp_path.iterdir())) == 2
 
 
+def test_ingest_loads_and_meshes_the_model_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ingest`` plans the program, then each feature again: all on one part."""
+    from probegen.evaluate.ingest import ingest
+    from probegen.spec.model import load_spec
+
+    loads = Counted(part_module.load_step)
+    meshes = Counted(part_module.tessellate)
+    monkeypatch.setattr(part_module, "load_step", loads)
+    monkeypatch.setattr(part_module, "tessellate", meshes)
+    sample = REPO / "samples/sphere25"
+    result = ingest(sample / "sphere_test.log", load_spec(sample / "sphere_test.toml"),
+                    with_path=True)
+    assert len(result.results) == 1 and result.path
+    assert (loads.calls, meshes.calls) == (1, 1)
+
+
 def test_the_part_builds_each_derived_value_once(monkeypatch: pytest.MonkeyPatch) -> None:
     meshes = Counted(part_module.tessellate)
     monkeypatch.setattr(part_module, "tessellate", meshes)
