@@ -43,8 +43,8 @@ CHECKED = (21, 21)
 
 def main(counts: tuple[int, int], exact_all: bool) -> None:
     from probegen.cad.freeform import FaceSurface, guide_points
-    from probegen.planning import make_setup, plan_program
-    from probegen.planning.collision import MeshObstacle, load_model, obstacle_for
+    from probegen.planning import make_setup, part_of, plan_program
+    from probegen.planning.collision import MeshObstacle, obstacle_for
     from probegen.planning.freeform import plan_touches
     from probegen.planning.freeform_spec import plan_freeform
     from probegen.spec.model import FreeformSpec, load_spec
@@ -53,8 +53,10 @@ def main(counts: tuple[int, int], exact_all: bool) -> None:
     base = spec.features[0]
     assert isinstance(base, FreeformSpec) and spec.model is not None
     feature = dataclasses.replace(base, counts=counts, margin=1.0)
-    model = load_model(str(spec.model))
-    obstacle = obstacle_for(spec.model, [])
+    part = part_of(spec)
+    assert part is not None
+    model = part.model
+    obstacle = obstacle_for(part, [])
     assert isinstance(obstacle, MeshObstacle)
     setup = make_setup(spec)
     r = spec.machine.probe.ball_radius
@@ -68,24 +70,24 @@ def main(counts: tuple[int, int], exact_all: bool) -> None:
         np.array([g.normal for g in grid.points]), np.array([g.uv for g in grid.points]),
         d=(0.0, 0.0, 1.0), method="vector", spacing=0.5, r=r)
     t2 = time.perf_counter()
-    plan = plan_freeform(feature, spec.model, spec.machine, setup, check=False)
+    plan = plan_freeform(feature, part, spec.machine, setup, check=False)
     t3 = time.perf_counter()
     sweeps = obstacle.sweeps  # cleared before each checked run: nothing checked before
     sweeps.clear()
-    checked = plan_freeform(feature, spec.model, spec.machine, setup)
+    checked = plan_freeform(feature, part, spec.machine, setup)
     t4 = time.perf_counter()
     program = plan_program(dataclasses.replace(spec, features=(feature,)),
-                           runtime_variables=True)
+                           runtime_variables=True, part=part)
     t5 = time.perf_counter()
     sub = counts if exact_all else CHECKED
     small = dataclasses.replace(feature, counts=sub)
     sweeps.clear()
     t6 = time.perf_counter()
-    exact = plan_freeform(small, spec.model, spec.machine, setup, fast=False)
+    exact = plan_freeform(small, part, spec.machine, setup, fast=False)
     t7 = time.perf_counter()
     sweeps.clear()
     t8 = time.perf_counter()
-    quick = plan_freeform(small, spec.model, spec.machine, setup)
+    quick = plan_freeform(small, part, spec.machine, setup)
     t9 = time.perf_counter()
 
     n = len(grid.points)

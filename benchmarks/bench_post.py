@@ -79,8 +79,8 @@ def main() -> None:
     machine = load_profile(REPO / "samples/post/vmc-fanuc-d4.toml")
     for name, program, step, offset, home, reroute in CASES:
         t0 = time.perf_counter()
-        out = post_file(program, machine, step, dialect="fanuc", offset=offset,
-                        reroute=reroute)
+        out = post_file(program, machine, cad.load_part(step), dialect="fanuc",
+                        offset=offset, reroute=reroute)
         t_post = time.perf_counter() - t0
         model = cad.load_step(step)
         segments = out.posted.segments

@@ -110,8 +110,9 @@ def run(model: Path) -> Row:
     machine = load_profile(MACHINE)
     t0, c0 = time.perf_counter(), time.process_time()
     try:
-        spec, notes = all_revolved_spec(model, machine)
-        planned = plan_program(spec, runtime_variables=True)
+        part = cad.load_part(model)
+        spec, notes = all_revolved_spec(part, machine)
+        planned = plan_program(spec, runtime_variables=True, part=part)
     except ProbegenError as exc:
         row.plan_s = time.perf_counter() - t0
         row.error = str(exc)

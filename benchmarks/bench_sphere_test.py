@@ -28,7 +28,7 @@ def main() -> int:
 
     from probegen import cad
     from probegen.planning import plan_program
-    from probegen.planning.collision import MeshObstacle, Stylus, _sweep, load_model
+    from probegen.planning.collision import MeshObstacle, Stylus, _sweep
     from probegen.spec.model import load_spec
 
     spec = load_spec("samples/sphere25/sphere_test.toml")
@@ -42,7 +42,7 @@ def main() -> int:
     print(f"full plan (load STEP, mesh, plan, check {len(planned.clearance.segments)} "
           f"segments): {t_plan:.2f} s")
 
-    mesh = cad.tessellate(load_model(str(spec.model)))
+    mesh = cad.load_part(str(spec.model)).mesh()
     obstacle = MeshObstacle(mesh, None)
     stylus = Stylus(3.0, 2.25, 50.0)
     segs = [(np.array(s.start), np.array(s.end)) for s in planned.clearance.segments]

@@ -42,7 +42,7 @@ from probegen.dialects import get_dialect
 from probegen.evaluate.ingest import ingest, nominal_of, to_json
 from probegen.evaluate.revolved import evaluate_revolved
 from probegen.machine.probe_model import ProbeModel
-from probegen.planning import plan_program
+from probegen.planning import part_of, plan_program
 from probegen.planning.revolved_spec import plan_revolved
 from probegen.results import parse_dmis_output
 from probegen.sim.contact import ContactHit, PlacedPart
@@ -232,7 +232,7 @@ def test_torus_from_exact_ball_centres(revolved_run: tuple[object, VirtualMachin
     _, vm = revolved_run
     spec = load_spec(REVOLVED_BLOCK)
     rim = next(f for f in spec.features if f.id == "RIM")
-    plan = plan_revolved(rim, spec.model, spec.machine, spec.clearance_z)  # type: ignore[arg-type]
+    plan = plan_revolved(rim, part_of(spec), spec.machine, spec.clearance_z)  # type: ignore[arg-type]
     centres = [t.centre for t in vm.touches if t.face_id == RIM.face]
     sections = [plan.section_of_touch[k] for k in sorted(plan.normals)]
     res = evaluate_revolved("RIM", nominal_of(plan), centres, sections, ball_radius=3.0,

@@ -8,15 +8,14 @@ import numpy as np
 import pytest
 from conftest import REPO
 
-from probegen import ir
+from probegen import cad, ir
 from probegen.errors import CollisionError
-from probegen.planning import plan_program
+from probegen.planning import part_of, plan_program
 from probegen.planning.collision import (
     MeshObstacle,
     SphereObstacle,
     Stylus,
     check_program,
-    load_model,
     obstacle_for,
 )
 from probegen.spec.model import load_spec
@@ -32,41 +31,40 @@ def planned():  # type: ignore[no-untyped-def]
     os.chdir(REPO)
     try:
         spec = load_spec(SPEC)
-        return spec, plan_program(spec, runtime_variables=True)
+        part = part_of(spec)
+        return spec, part, plan_program(spec, runtime_variables=True, part=part)
     finally:
         os.chdir(cwd)
 
 
 def test_sample_plan_clears_with_margin(planned) -> None:  # type: ignore[no-untyped-def]
-    _, p = planned
+    _, _, p = planned
     assert p.clearance.minimum >= 0.0
     kinds = {s.kind for s in p.clearance.segments}
     assert {"rapid", "protected", "touch PT 25", "touch LOC 6"} <= kinds
 
 
 def test_move_through_the_sphere_is_refused(planned) -> None:  # type: ignore[no-untyped-def]
-    spec, p = planned
+    spec, part, p = planned
     body = (*p.program.body[:2], ir.Move((0.0, 0.0, -5.0), ir.MoveMode.PROTECTED))
     bad = ir.Program(p.program.setup, body)
-    obstacle = obstacle_for(spec.model, [t.sphere for t in p.sphere_tests])
+    obstacle = obstacle_for(part, [t.sphere for t in p.sphere_tests])
     with pytest.raises(CollisionError, match=r"segment 1 \(protected\).*cuts 2.015 mm into face 5"):
         check_program(bad, obstacle, p.sphere_tests, spec.machine)
 
 
 def test_shank_is_checked(planned) -> None:  # type: ignore[no-untyped-def]
     # The ball passes beside the sphere but the shank above it would cut through it.
-    spec, p = planned
-    obstacle = obstacle_for(spec.model, [t.sphere for t in p.sphere_tests])
+    spec, part, p = planned
+    obstacle = obstacle_for(part, [t.sphere for t in p.sphere_tests])
     stylus = Stylus(3.0, 2.25, 50.0)
     ball, shank = obstacle.clearance(np.array([0.0, 0.0, -20.0]), stylus)
     assert ball > 0.0 and shank == pytest.approx(-0.01, abs=1e-9)
 
 
 def test_mesh_and_analytic_sphere_agree() -> None:
-    model = load_model(str(REPO / "samples/sphere25/sphere25.step"))
-    from probegen import cad
-
-    mesh = MeshObstacle(cad.tessellate(model), None)
+    part = cad.load_part(REPO / "samples/sphere25/sphere25.step")
+    mesh = MeshObstacle(part.mesh(), None)
     sphere = SphereObstacle(np.zeros((1, 3)), np.array([12.5]))
     stylus = Stylus(3.0, 2.25, 50.0)
     for p in ([0, 0, 20.0], [17.0, 3.0, 2.0], [-10.0, 10.0, 9.0]):
@@ -79,7 +77,7 @@ def test_swept_volume_bound_never_exceeds_the_sampled_clearance() -> None:
     """`MeshObstacle.sweep_bound` (capsule for the ball, slab for the shank) is a lower
     bound of the clearances along a move: never above the clearance at any point of it
     (200 random moves around the bore_block part, each sampled at 101 points)."""
-    obstacle = obstacle_for(REPO / "samples/bore_block/bore_block.step", [])
+    obstacle = obstacle_for(cad.load_part(REPO / "samples/bore_block/bore_block.step"), [])
     assert isinstance(obstacle, MeshObstacle)
     stylus = Stylus(3.0, 2.25, 50.0)
     rng = np.random.default_rng(7)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -14,7 +13,7 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from probegen import ir
+from probegen import cad, ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.planning import make_setup
 from probegen.planning.collision import MeshObstacle, check_program, obstacle_for
@@ -25,6 +24,7 @@ from probegen.spec.model import FreeformSpec, Spec, load_spec
 SAMPLE = REPO / "samples/freeform/freeform.step"
 NIST_CTC5 = REPO.parent / "shared/ref/nist-step/nist_ctc_05_asme1_rd.stp"
 SPEC = load_spec(REPO / "samples/freeform/freeform.toml")
+PART = cad.load_part(SAMPLE)
 SETUP = make_setup(SPEC)
 MACHINE = SPEC.machine
 R = MACHINE.probe.ball_radius
@@ -44,8 +44,8 @@ def _exact_clears(path: tuple[ir.Node, ...], obstacle: Any) -> bool:
 class Near:
     """Surface samples of one model (or one face of it): points and outward normals."""
 
-    def __init__(self, path: Path, face: int | None) -> None:
-        obstacle = obstacle_for(path, [])
+    def __init__(self, part: cad.Part, face: int | None) -> None:
+        obstacle = obstacle_for(part, [])
         assert isinstance(obstacle, MeshObstacle)
         self.obstacle = obstacle
         mesh = obstacle.mesh
@@ -88,14 +88,14 @@ def _t(v: np.ndarray) -> tuple[float, float, float]:
 
 @pytest.fixture(scope="module")
 def sample() -> Near:
-    return Near(SAMPLE, None)
+    return Near(PART, None)
 
 
 @pytest.fixture(scope="module")
 def nist() -> Near:
     if not NIST_CTC5.exists():
         pytest.skip("NIST CTC 5 model not available")
-    return Near(NIST_CTC5, 17)
+    return Near(cad.load_part(NIST_CTC5), 17)
 
 
 _unit = st.floats(-1.0, 1.0)
@@ -182,11 +182,11 @@ def _feature(**changes: Any) -> tuple[FreeformSpec, Spec]:
 @pytest.mark.parametrize("method", ["vector", "vertical", "vertical2d", "microplane"])
 def test_fast_and_exact_plans_are_the_same(method: str) -> None:
     f, spec = _feature(counts=(9, 7), margin=1.0, method=method)
-    sweeps = obstacle_for(SAMPLE, []).sweeps
+    sweeps = obstacle_for(PART, []).sweeps
     sweeps.clear()  # the exact check alone: no segment cleared by the fast check cached
-    exact = plan_freeform(f, spec.model, MACHINE, SETUP, fast=False)
+    exact = plan_freeform(f, PART, MACHINE, SETUP, fast=False)
     sweeps.clear()
-    quick = plan_freeform(f, spec.model, MACHINE, SETUP)
+    quick = plan_freeform(f, PART, MACHINE, SETUP)
     assert quick.nodes == exact.nodes and quick.left_out == exact.left_out
     assert len(quick.guides) > 40
 
@@ -194,7 +194,7 @@ def test_fast_and_exact_plans_are_the_same(method: str) -> None:
 def test_unsure_paths_go_to_the_exact_check() -> None:
     """A path the fast check cannot read (a touch not starting at its approach point) is
     unsure, and the exact check refuses it with its own message."""
-    near = Near(SAMPLE, None)
+    near = Near(PART, None)
     path = near.touch(5, 2.0, (0.0, 0.0, 0.0), 0.0)
     bad = (path[0], ir.Move((0.0, 0.0, 40.0), ir.MoveMode.PROTECTED), *path[2:])
     assert not clear_paths([bad], near.obstacle, SETUP, MACHINE)[0]

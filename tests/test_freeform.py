@@ -13,7 +13,7 @@ from probegen import cad, ir
 from probegen.cad.freeform import FaceMesh, FaceSurface, boundary_samples, guide_points, is_freeform
 from probegen.cli.app import main
 from probegen.dialects import get_dialect
-from probegen.planning import make_setup, plan_program
+from probegen.planning import make_setup, part_of, plan_program
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.spec.model import FreeformSpec, Spec, load_spec
 
@@ -132,7 +132,7 @@ def _plan(**changes: object) -> FreeformPlan:
     spec = _spec(**changes)
     f = spec.features[0]
     assert isinstance(f, FreeformSpec)
-    return plan_freeform(f, spec.model, spec.machine, make_setup(spec))
+    return plan_freeform(f, part_of(spec), spec.machine, make_setup(spec))
 
 
 def test_vector_touches_run_along_the_nominal_normal(in_repo: Path) -> None:
@@ -205,7 +205,7 @@ def test_unreachable_points_are_reported_with_the_obstacle(tmp_path: Path) -> No
     spec = dataclasses.replace(spec, model=step)
     f = spec.features[0]
     assert isinstance(f, FreeformSpec)
-    p = plan_freeform(f, spec.model, spec.machine, make_setup(spec))
+    p = plan_freeform(f, part_of(spec), spec.machine, make_setup(spec))
     under = [x for x in p.left_out if x.guide and x.point[0] < 12.0]
     assert under and all("unreachable from above" in x.reason and "face" in x.reason
                          for x in under)

@@ -47,8 +47,9 @@ def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
     three rounded edges under the 122 face, their tube facing away from a vertical
     probe); the whole program clears and runs on the virtual machine."""
     machine = load_profile(MACHINE)
-    spec, notes = all_revolved_spec(_need(model), machine)
-    result = plan_program(spec, runtime_variables=True)
+    part = cad.load_part(_need(model))
+    spec, notes = all_revolved_spec(part, machine)
+    result = plan_program(spec, runtime_variables=True, part=part)
     assert len(result.revolved) == planned
     assert result.clearance.minimum >= 0.0
     assert not [n for n in notes if "left out, it collides" in n]
@@ -72,10 +73,11 @@ def test_model_without_a_plannable_feature_completes_and_names_the_reasons(
     from probegen.cli.app import ExitCode, main
 
     model = _need(NIST / "nist_ftc_09_asme1_rd.stp")
-    spec, notes = all_revolved_spec(model, load_profile(MACHINE))
+    part = cad.load_part(model)
+    spec, notes = all_revolved_spec(part, load_profile(MACHINE))
     assert spec.features == ()
     assert notes and all("is not parallel to Z" in n for n in notes)
-    planned = plan_program(spec, runtime_variables=True)
+    planned = plan_program(spec, runtime_variables=True, part=part)
     assert planned.revolved == () and planned.program.body == ()
     assert main(["plan", str(model), "--all-revolved", "--machine",
                  str(MACHINE)]) == ExitCode.OK

@@ -78,8 +78,8 @@ def machine():  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def posted(machine) -> dict[str, PostOutput]:  # type: ignore[no-untyped-def]
-    return {c.name: post_file(c.program, machine, c.model, dialect="fanuc", offset=c.offset,
-                              reroute=c.reroute) for c in CASES}
+    return {c.name: post_file(c.program, machine, cad.load_part(c.model), dialect="fanuc",
+                              offset=c.offset, reroute=c.reroute) for c in CASES}
 
 
 def run_both(case: Case, out: PostOutput, shift: tuple[float, float, float] = (0, 0, 0),
@@ -164,7 +164,8 @@ def test_machine_errors_and_lobing_agree_with_the_cmm(posted: dict[str, PostOutp
 def test_colliding_goto_names_its_line(machine) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(CollisionError, match=r"IMTS_M_clean.dmi:50: PTMEAS/CART,-50.000,"
                        r".*--reroute lifts"):
-        post_file(DCX.program, machine, DCX.model, dialect="fanuc", offset=DCX.offset)
+        post_file(DCX.program, machine, cad.load_part(DCX.model), dialect="fanuc",
+                  offset=DCX.offset)
 
 
 def test_rerouted_move_is_lifted(posted: dict[str, PostOutput]) -> None:
@@ -340,8 +341,8 @@ def test_linuxcnc_post_runs_in_rs274(case: Case, rs274: str,  # noqa: F811
                                      tmp_path: Path) -> None:
     """The LinuxCNC program of each NIST post: LinuxCNC's own interpreter runs it, along
     the path the IR asks for (see test_linuxcnc: rs274 has no probe)."""
-    out = post_file(case.program, PROFILE, case.model, dialect="linuxcnc", offset=case.offset,
-                    reroute=case.reroute)
+    out = post_file(case.program, PROFILE, cad.load_part(case.model), dialect="linuxcnc",
+                    offset=case.offset, reroute=case.reroute)
     run = run_rs274(rs274, out.text, tmp_path)
     assert run.returncode == 0, run.output[-2000:]
     expected = Standalone(out.posted.program.setup).run(out.posted.program).path
@@ -413,7 +414,7 @@ def test_sphere_in_mm_and_inch(units: str, tmp_path: Path) -> None:
     program.write_text(text)
     case = Case("sphere", program, REPO / "samples/sphere25/sphere25.step", (0.0, 0.0, 0.0),
                 (0.0, 0.0, 100.0), False)
-    out = post_file(program, PROFILE, case.model, dialect="fanuc")
+    out = post_file(program, PROFILE, cad.load_part(case.model), dialect="fanuc")
     assert len(out.fmap.touches) == 5
     result, cmm = run_both(case, out)
     sphere = result.features["S1"]

@@ -61,13 +61,13 @@ C, MIN = Align.CENTER, Align.MIN
 
 
 @pytest.fixture(scope="module")
-def simple() -> cad.Model:
-    return cad.load_step(SIMPLE)
+def simple() -> cad.Part:
+    return cad.load_part(SIMPLE)
 
 
 @pytest.fixture(scope="module")
 def dcx() -> tuple[RevolvedFeature, ...]:
-    return revolved_features(cad.load_step(DCX))
+    return revolved_features(cad.load_part(DCX))
 
 
 @pytest.fixture(scope="module")
@@ -89,7 +89,7 @@ def _check_arcs(arcs: tuple[tuple[float, float], ...]) -> None:
 # -------------------------------------------------------------------- recognition
 
 
-def test_simple_part_bore(simple: cad.Model) -> None:
+def test_simple_part_bore(simple: cad.Part) -> None:
     (bore,) = revolved_features(simple)
     assert (bore.type, bore.inner, bore.faces, bore.accessible) == ("cylinder", True, (8,), True)
     assert bore.radius == pytest.approx(25.0, abs=1e-9)
@@ -105,7 +105,7 @@ def test_simple_part_bore(simple: cad.Model) -> None:
         section_at(simple, bore, 30.0)
 
 
-def test_simple_part_table(simple: cad.Model) -> None:
+def test_simple_part_table(simple: cad.Part) -> None:
     text = revolved_table(revolved_features(simple))
     rows = text.splitlines()
     assert rows[1].split() == ["1", "cylinder", "inner", "8", "25.0000", "-", "50.0000",
@@ -151,7 +151,7 @@ def test_dcx_horizontal_axes_are_not_accessible(dcx: tuple[RevolvedFeature, ...]
 
 @pytest.mark.parametrize("path", NIST, ids=lambda p: p.stem)
 def test_every_nist_model(path: Path) -> None:
-    model = cad.load_step(path)
+    model = cad.load_part(path)
     began = time.perf_counter()
     features = revolved_features(model)
     elapsed = time.perf_counter() - began
@@ -188,7 +188,7 @@ BORE, SLOT, SLOT_FLOOR = 15.0, 8.0, 10.0
 
 
 @pytest.fixture(scope="module")
-def slotted(tmp_path_factory: pytest.TempPathFactory) -> cad.Model:
+def slotted(tmp_path_factory: pytest.TempPathFactory) -> cad.Part:
     """A 60 x 60 x 20 block, a through bore r15 at the origin, and a slot 8 wide from
     the bore to the +X side, from z = 10 to the top."""
     part = Box(60, 60, 20, align=(C, C, MIN))
@@ -196,10 +196,10 @@ def slotted(tmp_path_factory: pytest.TempPathFactory) -> cad.Model:
     part -= Pos(0, 0, SLOT_FLOOR) * Box(40, SLOT, 20, align=(MIN, C, MIN))
     path = tmp_path_factory.mktemp("slot") / "slotted.step"
     export_step(part, path)
-    return cad.load_step(path)
+    return cad.load_part(path)
 
 
-def test_slot_is_left_out_of_the_accessible_range(slotted: cad.Model) -> None:
+def test_slot_is_left_out_of_the_accessible_range(slotted: cad.Part) -> None:
     bore = next(f for f in revolved_features(slotted) if f.inner and f.type == "cylinder")
     assert bore.radius == pytest.approx(BORE) and bore.extent == pytest.approx((0.0, 20.0))
     low, high = bore.sections  # z = 5 below the slot, z = 15 in it
@@ -345,7 +345,7 @@ def test_cone_section_touches_along_the_surface_normal(dcx: tuple[RevolvedFeatur
 # ------------------------------------------------------- the simple part, end to end
 
 
-def _simple_plan(simple: cad.Model, n: int, machine: MachineProfile) -> FeaturePlan:
+def _simple_plan(simple: cad.Part, n: int, machine: MachineProfile) -> FeaturePlan:
     (bore,) = revolved_features(simple)
     section = section_of("BORE", bore, section_at(simple, bore, 15.0))  # z = 40
     return plan_feature([section], n, ball=machine.probe.ball_radius,
@@ -366,7 +366,7 @@ def _setup(machine: MachineProfile) -> ir.Setup:
 
 
 @pytest.mark.parametrize("n", [4, 8])
-def test_simple_part_plan_clears_the_mesh(simple: cad.Model, machine: MachineProfile,
+def test_simple_part_plan_clears_the_mesh(simple: cad.Part, machine: MachineProfile,
                                           n: int) -> None:
     plan = _simple_plan(simple, n, machine)
     nodes = feature_nodes(plan, overtravel=machine.probe.overtravel,
@@ -375,22 +375,22 @@ def test_simple_part_plan_clears_the_mesh(simple: cad.Model, machine: MachinePro
     assert [t.index for t in touches] == list(range(1, n + 1))
     assert all(t.approach == machine.probe.approach for t in touches)
     program = ir.Program(_setup(machine), nodes)
-    report = check_program(program, obstacle_for(SIMPLE, []), [], machine)
+    report = check_program(program, obstacle_for(simple, []), [], machine)
     assert report.minimum >= 0.0
     assert sum(s.kind.startswith("touch") for s in report.segments) == n
 
 
-def test_the_check_is_not_vacuous(simple: cad.Model, machine: MachineProfile) -> None:
+def test_the_check_is_not_vacuous(simple: cad.Part, machine: MachineProfile) -> None:
     # the same section planned as a boss sends the stylus into the bore's wall
     plan = _simple_plan(simple, 4, machine)
     wrong = replace(plan.sections[0].section, inner=False)
     bad = plan_feature([wrong], 4, ball=3.0, retract=2.0, margin=0.5, clear_z=55.0)
     program = ir.Program(_setup(machine), feature_nodes(bad, overtravel=2.0))
     with pytest.raises(CollisionError, match=r"segment 1 \(protected\) .* cuts .* into face"):
-        check_program(program, obstacle_for(SIMPLE, []), [], machine)
+        check_program(program, obstacle_for(simple, []), [], machine)
 
 
-def test_simple_part_metrics(simple: cad.Model, machine: MachineProfile) -> None:
+def test_simple_part_metrics(simple: cad.Part, machine: MachineProfile) -> None:
     plan = _simple_plan(simple, 8, machine)
     figures = compare(plan, machine)
     assert figures.lower_bound.length <= figures.plan.length < figures.baseline.length

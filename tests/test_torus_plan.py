@@ -107,7 +107,7 @@ def test_all_revolved_plans_the_torus() -> None:
 
     if not MODEL.exists():
         pytest.skip(f"{MODEL} is not here")
-    spec, _ = all_revolved_spec(MODEL, load_profile(PROFILE))
+    spec, _ = all_revolved_spec(cad.load_part(MODEL), load_profile(PROFILE))
     kinds = {f.kind for f in spec.features}
     assert "torus" in kinds
     rim = next(f for f in spec.features if f.kind == "torus")

@@ -6,7 +6,9 @@ shape handle inside :class:`Model`, which only functions of this package use.
 
 The public names are re-exported here from :mod:`probegen.cad.loading` (reading a STEP
 file in a forked child process), :mod:`probegen.cad.faces` (face records and queries)
-and :mod:`probegen.cad.mesh` (tessellation).
+and :mod:`probegen.cad.mesh` (tessellation); :class:`~probegen.cad.part.Part`
+(:mod:`probegen.cad.part`) is the model loaded once with its mesh and exact queries,
+the object every stage after loading is handed.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from probegen.cad.faces import (
 )
 from probegen.cad.loading import STEP_HEADER, STEP_TERMINATOR, load_step
 from probegen.cad.mesh import tessellate
+from probegen.cad.part import Part, load_part
 
 __all__ = [
     "DEFAULT_PICK_DISTANCE",
@@ -31,10 +34,12 @@ __all__ = [
     "STEP_TERMINATOR",
     "FaceRecord",
     "Model",
+    "Part",
     "Vec3",
     "face_at",
     "face_by_id",
     "features_table",
+    "load_part",
     "load_step",
     "tessellate",
 ]

@@ -32,7 +32,7 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_SOLID, TopAbs_State, TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 
-from probegen.cad import FaceRecord, Model
+from probegen.cad.faces import FaceRecord, Model
 from probegen.constants import tol
 
 FloatArray = NDArray[np.float64]

@@ -19,8 +19,11 @@ from OCP.TopoDS import TopoDS_Face
 from probegen.cad.faces import Model, _xyz
 from probegen.errors import ModelError
 
+CHORDAL_TOLERANCE = 0.01
+"""Default largest chordal deviation of a mesh from the exact surface, mm."""
 
-def tessellate(model: Model, tolerance: float = 0.01) -> trimesh.Trimesh:
+
+def tessellate(model: Model, tolerance: float = CHORDAL_TOLERANCE) -> trimesh.Trimesh:
     """Triangulate the model for collision checks.
 
     Any earlier triangulation is discarded first, so the mesh depends on ``tolerance``

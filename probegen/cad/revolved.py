@@ -52,7 +52,8 @@ from OCP.BRepBndLib import BRepBndLib
 from OCP.gp import gp_Trsf
 from OCP.TopLoc import TopLoc_Location
 
-from probegen.cad import FaceRecord, Model, Vec3
+from probegen.cad.faces import FaceRecord, Model, Vec3
+from probegen.cad.part import Part
 from probegen.cad.revolved_records import (
     FULL_CIRCLE,
     SAME_LENGTH,
@@ -218,20 +219,26 @@ def _axial_clusters(model: Model, group: list[_Surface]
 # ---------------------------------------------------------------------- features
 
 
-def revolved_features(model: Model) -> tuple[RevolvedFeature, ...]:
-    """Recognise the revolved features of a model, with their default sections.
+def revolved_features(part: Part) -> tuple[RevolvedFeature, ...]:
+    """Recognise the revolved features of a part, with their default sections (once per
+    part: the part keeps them).
 
     Faces of type cylinder, cone, sphere and torus are grouped by surface (same axis
     line, radii / half angle and M2 sense); a group splits where its faces leave a gap
     along the axis (two lands of one shaft are two features).
 
     Args:
-        model: a loaded model.
+        part: a loaded part.
 
     Returns:
         The features, ordered by their lowest face id.
     """
-    queries = _queries(model)
+    return part.memo(("revolved features",), lambda: _recognise(part))
+
+
+def _recognise(part: Part) -> tuple[RevolvedFeature, ...]:
+    queries = _queries(part)
+    model = part.model
     surfaces = [_surface(f) for f in model.faces if f.type in REVOLVED_TYPES]
     runs = [(group[0], faces, low, high)
             for group in _surface_groups(surfaces)

@@ -17,8 +17,9 @@ import numpy as np
 from OCP.gp import gp_Dir, gp_Lin, gp_Pnt
 from OCP.IntCurvesFace import IntCurvesFace_ShapeIntersector
 
-from probegen.cad import Model, Vec3
-from probegen.cad.exact import CLASSIFY_TOLERANCE, ExactFaces
+from probegen.cad.exact import CLASSIFY_TOLERANCE
+from probegen.cad.faces import Vec3
+from probegen.cad.part import Part
 from probegen.cad.revolved_records import (
     FULL_CIRCLE,
     SAME_LENGTH,
@@ -70,11 +71,11 @@ def default_axials(kind: str, extent: tuple[float, float]) -> tuple[float, ...]:
 
 
 class _Queries:
-    """The exact face tests and the ray caster of one model, built on first use."""
+    """The exact face tests and the ray caster of one part, built on first use."""
 
-    def __init__(self, model: Model) -> None:
-        self.model = model
-        self.exact = ExactFaces(model)
+    def __init__(self, part: Part) -> None:
+        self.model = part.model
+        self.exact = part.exact
         self._rays: IntCurvesFace_ShapeIntersector | None = None
 
     def hits_up(self, point: FloatArray) -> list[float]:
@@ -90,16 +91,10 @@ class _Queries:
         return sorted(self._rays.WParameter(i) for i in range(1, self._rays.NbPnt() + 1))
 
 
-_QUERIES: dict[int, tuple[Model, _Queries]] = {}
-
-
-def _queries(model: Model) -> _Queries:
-    """The model's :class:`_Queries`, built once per loaded model (the ray caster's
-    load alone takes tens of milliseconds on a large model)."""
-    hit = _QUERIES.get(id(model))
-    if hit is None or hit[0] is not model:
-        hit = _QUERIES[id(model)] = (model, _Queries(model))
-    return hit[1]
+def _queries(part: Part) -> _Queries:
+    """The part's :class:`_Queries`, built once per part (the ray caster's load alone
+    takes tens of milliseconds on a large model)."""
+    return part.memo(("revolved section queries",), lambda: _Queries(part))
 
 
 def _sample_count(radius: float) -> int:
@@ -221,11 +216,11 @@ def _section(queries: _Queries, feature: RevolvedFeature, axial: float) -> Featu
                           not reason, reason)
 
 
-def section_at(model: Model, feature: RevolvedFeature, axial: float) -> FeatureSection:
+def section_at(part: Part, feature: RevolvedFeature, axial: float) -> FeatureSection:
     """A section of ``feature`` at any axial position inside its extent.
 
     Args:
-        model: the model the feature came from.
+        part: the part the feature came from.
         feature: a feature of :func:`revolved_features`.
         axial: position along the axis from ``feature.origin``, mm.
 
@@ -234,8 +229,8 @@ def section_at(model: Model, feature: RevolvedFeature, axial: float) -> FeatureS
     """
     low, high = feature.extent
     if not low - SAME_LENGTH <= axial <= high + SAME_LENGTH:
-        raise ModelError(f"{model.path}: revolved feature {feature.id} (faces "
+        raise ModelError(f"{part.path}: revolved feature {feature.id} (faces "
                          f"{_ids(feature.faces)}): expected a section from {low:.4f} to "
                          f"{high:.4f} mm along the axis, found {axial:.4f}")
-    return _section(_queries(model), feature, axial)
+    return _section(_queries(part), feature, axial)
 

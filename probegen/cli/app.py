@@ -102,22 +102,24 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
         spec = load_spec(args.spec)
         ball = spec.machine.probe.ball_radius
         if args.part or spec.model is not None:
-            return cad.load_step(args.part or str(spec.model)), ball
+            return cad.load_part(args.part or str(spec.model)), ball
         spheres = [f for f in spec.features if isinstance(f, SphereTest) and f.centre]
         centres = [f.centre for f in spheres]
         radii = [(f.diameter or 0.0) / 2.0 for f in spheres]
         return (centres, radii), ball
     if not (args.part and args.machine):
         raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
-    return cad.load_step(args.part), load_profile(args.machine).probe.ball_radius
+    return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
 
 
 def _post(args: argparse.Namespace) -> int:
+    from probegen.cad import load_part
     from probegen.dialects import get_dialect
     from probegen.machine.profile import load_profile
     from probegen.post.files import post_file, write_post
 
-    out = post_file(args.program, load_profile(args.machine), args.model,
+    machine = load_profile(args.machine)
+    out = post_file(args.program, machine, load_part(args.model),
                     dialect=args.dialect, offset=tuple(args.model_offset),
                     skip_unsupported=args.skip_unsupported, reroute=args.reroute,
                     number=args.number)

@@ -8,26 +8,32 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from probegen.errors import ExitCode, ProbegenError
 from probegen.files import write_file
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 
 def _compile(args: argparse.Namespace) -> int:
     from probegen.cli.progress import Bar
     from probegen.dialects import get_dialect
-    from probegen.planning import plan_program
+    from probegen.planning import part_of, plan_program
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
     names = args.dialect or [spec.dialect]
+    part: Part | None = None
     outputs = []
     for name in names:
         dialect = get_dialect(name)
+        if part is None:
+            part = part_of(spec)  # loaded once, for every dialect
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
-                                   progress=bar)
+                                   progress=bar, part=part)
         text = dialect.generate(planned.program)
         if args.output == "-":
             sys.stdout.write(text)
@@ -89,33 +95,38 @@ def _target(output: str, stem: str, ext: str, count: int) -> Path:
 def _features(args: argparse.Namespace) -> int:
     from probegen import cad
 
-    model = cad.load_step(args.model)
+    part = cad.load_part(args.model)
     if args.revolved:
         from probegen.cad.revolved import revolved_features, revolved_table
 
-        table = revolved_table(revolved_features(model))
+        table = revolved_table(revolved_features(part))
     else:
-        table = cad.features_table(model)
+        table = cad.features_table(part.model)
     sys.stdout.write(table if table.endswith("\n") else table + "\n")
     return ExitCode.OK
 
 
 def _plan(args: argparse.Namespace) -> int:
     from probegen import ir
-    from probegen.planning import plan_program
+    from probegen.planning import part_of, plan_program
     from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
     from probegen.spec.model import load_spec
 
     notes: tuple[str, ...] = ()
+    part: Part | None
     if args.all_revolved:
+        from probegen.cad import load_part
         from probegen.machine.profile import load_profile
 
         if not args.machine:
             raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
-        spec, notes = all_revolved_spec(Path(args.input), load_profile(args.machine))
+        machine = load_profile(args.machine)
+        part = load_part(args.input)
+        spec, notes = all_revolved_spec(part, machine)
     else:
         spec = load_spec(args.input)
-    planned = plan_program(spec, runtime_variables=True)
+        part = part_of(spec)
+    planned = plan_program(spec, runtime_variables=True, part=part)
     if planned.revolved or not planned.freeform:
         sys.stdout.write(metrics_table(planned.revolved, spec.machine))
     for p in planned.sphere_tests:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from probegen.machine.calibration import ProbeCalibration
 from probegen.results import DprntLog
 from probegen.spec.actions import PlanarSpec, ToolAction
 from probegen.spec.model import RevolvedSpec, Spec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 Vec3 = tuple[float, float, float]
 
@@ -139,13 +143,15 @@ def tool_correction(tool: ToolAction, excess: float) -> float:
     return 0.0 if abs(c) < tool.dead_band else c
 
 
-def decisions(spec: Spec, log: DprntLog,
-              calibration: ProbeCalibration | None = None) -> tuple[Decision, ...]:
+def decisions(spec: Spec, log: DprntLog, calibration: ProbeCalibration | None = None,
+              part: Part | None = None) -> tuple[Decision, ...]:
     """Every decision value of ``spec``'s features with actions: offline and printed
-    (offline with ``calibration`` as a program compiled with it computes them)."""
+    (offline with ``calibration`` as a program compiled with it computes them).
+    ``part`` is the spec's model, loaded; loaded here when needed and not given."""
     from probegen.planning.actions import planar_check, revolved_check
     from probegen.planning.planar import plan_planar
     from probegen.planning.revolved_spec import plan_revolved, revolved_nodes
+    from probegen.planning.setup import part_of
 
     balls: dict[str, dict[int, Vec3]] = {}
     for t in log.latest_touches():
@@ -159,12 +165,14 @@ def decisions(spec: Spec, log: DprntLog,
     for f in spec.features:
         if not isinstance(f, RevolvedSpec | PlanarSpec) or not f.actions.any:
             continue
+        if part is None:
+            part = part_of(spec)
         if isinstance(f, RevolvedSpec):
-            p = plan_revolved(f, spec.model, m, spec.clearance_z)
+            p = plan_revolved(f, part, m, spec.clearance_z)
             nodes = revolved_check(revolved_nodes(p, m, spec.clearance_z), f, p.definition, m)
             check = next(n for n in nodes if isinstance(n, Check))
         else:
-            found = planar_check(plan_planar(f, spec.model, m), m)[1]
+            found = planar_check(plan_planar(f, part, m), m)[1]
             assert found is not None
             check = found
         out += _pair(f, check, balls.get(f.id, {}), printed.get(f.id, {}))

@@ -25,7 +25,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -57,6 +57,9 @@ from probegen.results.dprnt import log_lines, parse_dprnt, read_raw
 from probegen.results.logcheck import check_log, ranges
 from probegen.spec.actions import PlanarSpec
 from probegen.spec.model import FREEFORM_STRIDE, FreeformSpec, RevolvedSpec, Spec, SphereTest
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 Vec3 = tuple[float, float, float]
 
@@ -207,7 +210,7 @@ class _Gaps:
 def ingest(log_path: str | Path, spec: Spec, *,
            calibration: ProbeCalibration | None = None, with_path: bool = False,
            decision_rule: str | None = None, run: int | None = None,
-           ignore_identity: bool = False) -> Ingested:
+           ignore_identity: bool = False, part: Part | None = None) -> Ingested:
     """Read a DPRNT log and evaluate every feature of ``spec``: completely, or as
     ``NOT EVALUATED`` with the reason.
 
@@ -217,19 +220,23 @@ def ingest(log_path: str | Path, spec: Spec, *,
     passed to it.  ``with_path`` also runs the collision check of the whole program
     again to record the nominal stylus path for the report.  ``decision_rule``
     overrides the spec's ``[evaluation] decision_rule``.  ``calibration`` defaults to
-    the spec's ``[machine] calibration``.
+    the spec's ``[machine] calibration``.  ``part`` is the spec's model, loaded
+    (:func:`probegen.planning.part_of`); loaded here when not given.
 
     Raises:
         ProbegenError: the log cannot be read, belongs to another program, names points
             the plan does not have, or holds no touch of any feature of the spec and no
             alarm of one (a run stopped at its first touch is NOT EVALUATED).
     """
-    from probegen.planning import plan_program
+    from probegen.planning import part_of, plan_program
     from probegen.planning.identity import planned_touches
 
     calibration = for_stylus(calibration or spec.machine.calibration,
                              spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
-    planned = plan_program(spec, runtime_variables=True, check_collisions=with_path)
+    if part is None:
+        part = part_of(spec)
+    planned = plan_program(spec, runtime_variables=True, check_collisions=with_path,
+                           part=part)
     data = read_raw(log_path)  # once: parsed here, quoted in diagnostics by check_log
     checked = check_log(parse_dprnt(data, source=str(log_path)), program=spec.program_number,
                         identity=planned.program.setup.identity,
@@ -253,20 +260,20 @@ def ingest(log_path: str | Path, spec: Spec, *,
     outcomes: list[Outcome] = []
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            outcomes.append(_revolved(feature, spec, touches, notes, gaps, budget,
+            outcomes.append(_revolved(feature, spec, part, touches, notes, gaps, budget,
                                      calibration))
         elif isinstance(feature, FreeformSpec):
-            outcomes.append(ingest_freeform(feature, spec, touches, notes, calibration,
+            outcomes.append(ingest_freeform(feature, spec, part, touches, notes, calibration,
                                             gaps))
         elif isinstance(feature, PlanarSpec):
-            outcomes.append(_planar(feature, spec, touches, gaps, calibration))
+            outcomes.append(_planar(feature, spec, part, touches, gaps, calibration))
         else:
-            outcomes.append(_sphere_test(feature, spec, touches, notes, gaps, calibration,
-                                         budget))
+            outcomes.append(_sphere_test(feature, spec, part, touches, notes, gaps,
+                                         calibration, budget))
     path = tuple((s.feature, s.kind, s.start, s.end)
                  for s in planned.clearance.segments) if with_path else ()
     return Ingested(str(log_path), log, _only(outcomes, SphereTestResult), tuple(notes),
-                    path, _only(outcomes, RevolvedResult), decisions(spec, log, calibration),
+                    path, _only(outcomes, RevolvedResult), decisions(spec, log, calibration, part),
                     _only(outcomes, FreeformResult), _only(outcomes, PlanarResult),
                     _only(outcomes, NotEvaluated), decision_rule or spec.decision_rule, budget,
                     calibration)
@@ -313,13 +320,13 @@ def _upper(limit: float | None) -> tuple[float | None, float | None] | None:
     return None if limit is None else (None, limit)
 
 
-def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[str],
-                 gaps: _Gaps, calibration: ProbeCalibration | None, budget: Budget
-                 ) -> Outcome:
+def _sphere_test(feature: SphereTest, spec: Spec, part: Part | None, touches: Touches,
+                 notes: list[str], gaps: _Gaps, calibration: ProbeCalibration | None,
+                 budget: Budget) -> Outcome:
     """Evaluate a sphere test (method M1) from its touches."""
     from probegen.planning.sphere_test import plan_points, resolve_sphere
 
-    sphere = resolve_sphere(feature, spec.model)
+    sphere = resolve_sphere(feature, part)
     plan = plan_points(feature, sphere, spec.machine)
     planned = range(1, len(plan.directions) + 1)
     found = [k for k in planned if (feature.id, k) in touches]
@@ -351,14 +358,14 @@ def _sphere_test(feature: SphereTest, spec: Spec, touches: Touches, notes: list[
     return _judge(feature.id, "sphere_test", reason, names, evaluate)
 
 
-def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
-            calibration: ProbeCalibration | None) -> Outcome:
+def _planar(feature: PlanarSpec, spec: Spec, part: Part | None, touches: Touches,
+            gaps: _Gaps, calibration: ProbeCalibration | None) -> Outcome:
     """Evaluate a line or plane from its touches (``evaluate_planar``)."""
     from probegen.planning.actions import planar_fit
     from probegen.planning.planar import plan_planar
 
     machine = dataclasses.replace(spec.machine, calibration=calibration)
-    check = planar_fit(plan_planar(feature, spec.model, machine), machine)
+    check = planar_fit(plan_planar(feature, part, machine), machine)
     tol = feature.tolerance
     names = _limits(("DIST", tol.position), ("ANGLE", _sym(tol.angle)),
                     ("FORM", _upper(tol.form)))
@@ -369,8 +376,8 @@ def _planar(feature: PlanarSpec, spec: Spec, touches: Touches, gaps: _Gaps,
         lambda: evaluate_planar(check, balls, radius=calibration, tolerance=tol)))
 
 
-def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: list[str],
-                    calibration: ProbeCalibration | None = None,
+def ingest_freeform(feature: FreeformSpec, spec: Spec, part: Part | None, touches: Touches,
+                    notes: list[str], calibration: ProbeCalibration | None = None,
                     gaps: _Gaps | None = None) -> Outcome:
     """Evaluate one free-form feature from ball centres by (feature, touch index).
 
@@ -382,7 +389,7 @@ def ingest_freeform(feature: FreeformSpec, spec: Spec, touches: Touches, notes: 
     from probegen.planning import make_setup
     from probegen.planning.freeform_spec import plan_freeform
 
-    plan = plan_freeform(feature, spec.model, spec.machine, make_setup(spec))
+    plan = plan_freeform(feature, part, spec.machine, make_setup(spec))
     nominal = [NominalPoint(t.guide, t.contact, t.normal) for t in plan.touches
                if t.role == 0]
     full, missing = complete_guides(feature.id, feature.method, nominal, touches)
@@ -424,18 +431,21 @@ def dmis_touches(output: DmisOutput, spec: Spec) -> dict[tuple[str, int], Vec3]:
     return out
 
 
-def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = None) -> Ingested:
+def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = None,
+                part: Part | None = None) -> Ingested:
     """``probegen ingest`` of a DMIS output file: the free-form features of ``spec``
     (the CMM reports the other kinds itself; ``probegen qif`` exports them).
 
     ``log`` is an empty DPRNT log that carries the file's diagnostics; ``complete`` is
     whether the output holds at least one feature actual.
 
+    ``part`` is the spec's model, loaded; loaded here when not given.
+
     Raises:
         ProbegenError: the file cannot be read, or holds no free-form touches of the spec.
     """
     output = read_dmis_output(path)
-    outcomes, notes = ingest_dmis_freeform(output, spec)
+    outcomes, notes = ingest_dmis_freeform(output, spec, part)
     if not any(isinstance(o, FreeformResult) or (
             isinstance(o, NotEvaluated) and o.partial is not None) for o in outcomes):
         raise ProbegenError(f"{path}: expected point actuals FA(<id>_<k>) of the spec's "
@@ -446,25 +456,31 @@ def ingest_dmis(path: str | Path, spec: Spec, *, decision_rule: str | None = Non
                     rule=decision_rule or spec.decision_rule, budget=budget_of(spec, None))
 
 
-def ingest_dmis_freeform(output: DmisOutput, spec: Spec) -> tuple[tuple[Outcome, ...],
-                                                                   tuple[str, ...]]:
+def ingest_dmis_freeform(output: DmisOutput, spec: Spec, part: Part | None = None
+                         ) -> tuple[tuple[Outcome, ...], tuple[str, ...]]:
     """Evaluate the free-form features of ``spec`` from a DMIS output file (the CMM
-    evaluates the other kinds itself); returns the outcomes and the notes."""
+    evaluates the other kinds itself); returns the outcomes and the notes.  ``part`` is
+    the spec's model, loaded; loaded here when not given (and the spec has free-form
+    features)."""
+    from probegen.planning import part_of
+
     touches = dmis_touches(output, spec)
     notes: list[str] = []
-    found = [ingest_freeform(f, spec, touches, notes) for f in spec.features
-             if isinstance(f, FreeformSpec)]
+    wanted = [f for f in spec.features if isinstance(f, FreeformSpec)]
+    if part is None and wanted:
+        part = part_of(spec)
+    found = [ingest_freeform(f, spec, part, touches, notes) for f in wanted]
     return tuple(found), tuple(notes)
 
 
-def _revolved(feature: RevolvedSpec, spec: Spec, touches: Touches, notes: list[str],
-              gaps: _Gaps, budget: Budget, calibration: ProbeCalibration | None = None
-              ) -> Outcome:
+def _revolved(feature: RevolvedSpec, spec: Spec, part: Part | None, touches: Touches,
+              notes: list[str], gaps: _Gaps, budget: Budget,
+              calibration: ProbeCalibration | None = None) -> Outcome:
     """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
     without contact, too few to fit, or a failed fit)."""
     from probegen.planning.revolved_spec import plan_revolved
 
-    plan = plan_revolved(feature, spec.model, spec.machine, spec.clearance_z)
+    plan = plan_revolved(feature, part, spec.machine, spec.clearance_z)
     indices = sorted(plan.normals)
     found = [k for k in indices if (feature.id, k) in touches]
     missing = sorted(set(indices) - set(found))

@@ -1,17 +1,17 @@
 """Planning: spec features → an ``ir.Program`` whose every move the collision check cleared.
 
-``plan_program`` is the entry point.  It needs one fact about the target dialect, whether
+``plan_program`` is the entry point.  It loads the spec's part model once (or is handed
+it) and passes the :class:`probegen.cad.Part` down to every feature planner and the
+collision check.  It needs one fact about the target dialect, whether
 the controller can compute at run time (``runtime_variables``): the planner asks for it as
 a plain flag so that planning never imports the dialects.
 """
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from probegen import ir
 from probegen.machine.profile import MachineProfile
@@ -25,10 +25,17 @@ from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import Comparison
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
+from probegen.planning.setup import calibration_header, make_setup, part_of, setup_for
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
 from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
 from probegen.spec.actions import PlanarSpec
 from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
+
+__all__ = ["PlannedProgram", "calibration_header", "make_setup", "part_of", "plan_program",
+           "setup_for"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,49 +64,16 @@ class PlannedProgram:
     freeform: tuple[FreeformPlan, ...] = ()
 
 
-def make_setup(spec: Spec) -> ir.Setup:
-    """The program's setup block from the spec and its machine profile."""
-    return setup_for(spec.machine, spec.program_number, spec.program_name, spec.clearance_z)
-
-
-def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> ir.Setup:
-    """The setup block of program ``number``/``name`` for machine ``m`` (clearance in mm,
-    work coordinates)."""
-    return ir.Setup(
-        program_number=number, program_name=name, units=m.units,
-        work_offset=m.work_offset, clearance_z=clearance_z,
-        ball_diameter=m.probe.ball_diameter, shank_diameter=m.probe.shank_diameter,
-        tool_number=m.probe.tool_number, tool_change=m.controller.tool_change,
-        position_feed=m.feeds.position, probe_feed=m.feeds.probe,
-        probe_on=m.controller.probe_on, probe_off=m.controller.probe_off,
-        variable_base=m.controller.variable_base, reset_codes=m.controller.reset_codes,
-        probe_length=m.probe.length,
-        **calibration_header(m),
-    )
-
-
-def calibration_header(m: MachineProfile) -> dict[str, Any]:
-    """The setup's ``calibration`` comment lines and ``calibration_id`` (empty without
-    a calibration): fingerprint, date, source file name and mean effective radius."""
-    cal = m.calibration
-    if cal is None:
-        return {}
-    source = Path(cal.source).name if cal.source else "UNKNOWN SOURCE"
-    lines = (f"PROBE CALIBRATION {cal.fingerprint} DATED {cal.date or 'UNDATED'}",
-             f"FROM {source}",
-             f"MEAN EFFECTIVE RADIUS {cal.effective_radius:.4f} MM")
-    return {"calibration": tuple(re.sub(r"[^A-Z0-9 .,:_/+-]", "_", t.upper())[:72]
-                                 for t in lines),
-            "calibration_id": cal.fingerprint}
-
-
 def plan_program(spec: Spec, *, runtime_variables: bool,
                  progress: Callable[[int], None] | None = None,
-                 check_collisions: bool = True) -> PlannedProgram:
+                 check_collisions: bool = True, part: Part | None = None) -> PlannedProgram:
     """Plan every feature of ``spec`` and check the whole path for collisions.
 
     Args:
         spec: the validated spec.
+        part: the spec's model, loaded (:func:`probegen.planning.setup.part_of`); loaded
+            here when not given.  Hand it in to plan one spec more than once (one
+            program per dialect) without loading the model again.
         runtime_variables: whether the target controller computes at run time (Macro B
             yes, DMIS no); decides how a sphere of uncertain position is located.
         progress: called with 1 for every feature planned and every node checked.
@@ -116,6 +90,8 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         CollisionError: a move would bring the stylus into the part.
     """
     machine = spec.machine
+    if part is None:
+        part = part_of(spec)
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
     revolved: list[RevolvedPlan] = []
@@ -125,18 +101,18 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     setup = make_setup(spec)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            revolved.append(plan_revolved(feature, spec.model, machine, spec.clearance_z))
+            revolved.append(plan_revolved(feature, part, machine, spec.clearance_z))
         elif isinstance(feature, FreeformSpec):
-            freeform.append(plan_freeform(feature, spec.model, machine, setup))
+            freeform.append(plan_freeform(feature, part, machine, setup))
         elif isinstance(feature, PlanarSpec):
-            planar = plan_planar(feature, spec.model, machine)
+            planar = plan_planar(feature, part, machine)
             axes, check = planar_check(planar, machine)
             body += planar_nodes(planar, machine, spec.clearance_z, axes)
             if check is not None:
                 body.append(check)
                 checked.append((feature, check))
         else:
-            sphere = resolve_sphere(feature, spec.model)
+            sphere = resolve_sphere(feature, part)
             p = plan_points(feature, sphere, machine)
             plans.append(p)
             offset = sphere_offset(feature, sphere.centre, machine.work_offset)
@@ -150,7 +126,7 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         if progress is not None:
             progress(1)
     tour = figures = None
-    obstacle = obstacle_for(spec.model, [p.sphere for p in plans])
+    obstacle = obstacle_for(part, [p.sphere for p in plans])
     if revolved:
         stops = [stop_of(r) for r in revolved]
         linker = Linker(Sweeper(obstacle, machine, machine.probe.ball_radius), stops,

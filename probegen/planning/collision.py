@@ -31,11 +31,9 @@ gives the geometry without a model.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -43,6 +41,9 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 MIN_STEP = 0.01
 """Smallest sphere-tracing step, mm; a segment closer than this to the limit is stepped
@@ -205,43 +206,25 @@ _SLAB_FACES = np.array([4, 0, 1, 2, 3, 4, 4, 7, 6, 5, 4, 0, 4, 5, 1, 4, 1, 5, 6,
 """The six quads of the slab (vertex count, then indices), for ``fcl.Convex``."""
 
 
-_MODELS: dict[tuple[str, int, int], Any] = {}
-_MESHES: dict[tuple[str, int, int], MeshObstacle] = {}
-
-
-def file_key(path: str) -> tuple[str, int, int]:
-    """A file's identity for caches: absolute path, mtime (ns) and size."""
-    st = os.stat(path)
-    return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
-
-
-def load_model(path: str) -> Any:
-    """Load a STEP model once per process (planning reads it for faces and the mesh);
-    a file changed since (mtime or size) is loaded again."""
-    from probegen import cad
-
-    key = file_key(path)
-    hit = _MODELS.get(key)
-    if hit is None:
-        hit = _MODELS[key] = cad.load_step(path)
-    return hit
-
-
-def obstacle_for(model: Path | None, spheres: Sequence[Any]) -> Obstacle:
-    """The part as an obstacle: its mesh (tessellated once per loaded model), or the
-    spheres when there is no model."""
-    if model is not None:
-        from probegen import cad
-
-        key = file_key(str(model))
-        hit = _MESHES.get(key)
-        if hit is None:
-            mesh = cad.tessellate(load_model(str(model)))
-            hit = _MESHES[key] = MeshObstacle(mesh, mesh.metadata.get("face_ids"))
-        return hit
+def obstacle_for(part: Part | None, spheres: Sequence[Any]) -> Obstacle:
+    """The part as an obstacle: its mesh at :data:`MESH_TOLERANCE` as a BVH, built once
+    per part and kept on it (:meth:`probegen.cad.Part.memo`); the analytic spheres when
+    there is no model."""
+    if part is not None:
+        return part.memo(("collision obstacle",), lambda: mesh_obstacle(part))
     centres = np.array([s.centre for s in spheres], dtype=np.float64).reshape(-1, 3)
     radii = np.array([s.diameter / 2.0 for s in spheres], dtype=np.float64)
     return SphereObstacle(centres, radii)
+
+
+def mesh_obstacle(part: Part, offset: Sequence[float] | None = None) -> MeshObstacle:
+    """A new obstacle of the part's mesh (at :data:`MESH_TOLERANCE`), translated by
+    ``offset`` (mm) when given."""
+    mesh = part.mesh(MESH_TOLERANCE)
+    if offset is not None:
+        mesh = mesh.copy()
+        mesh.apply_translation(offset)
+    return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
 
 
 @dataclass(frozen=True, slots=True)

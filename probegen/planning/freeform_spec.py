@@ -25,18 +25,20 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import Obstacle, check_program, load_model, obstacle_for
+from probegen.planning.collision import Obstacle, check_program, obstacle_for
 from probegen.planning.freeform import PlannedTouch, group_nodes, plan_touches
 from probegen.planning.heightmap import clear_paths
 from probegen.spec.model import FreeformSpec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 Vec3 = tuple[float, float, float]
 
@@ -99,13 +101,13 @@ def resolve_face(feature: FreeformSpec, model: Any) -> int:
     return cad.face_at(model, feature.at or (0.0, 0.0, 0.0)).id
 
 
-def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: MachineProfile,
+def plan_freeform(feature: FreeformSpec, part: Part | None, machine: MachineProfile,
                   setup: ir.Setup, *, check: bool = True, fast: bool = True) -> FreeformPlan:
     """Plan one free-form feature (see the module docstring).
 
     Args:
         feature: the spec feature.
-        model_path: the part model.
+        part: the part model, loaded.
         machine: the machine profile (probe, margin).
         setup: the program's setup (ball, clearance plane) for the collision checks.
         check: check each guide point and each link (False: plan only, for speed).
@@ -119,9 +121,9 @@ def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: Machi
     """
     from probegen.cad.freeform import FaceSurface, guide_points
 
-    if model_path is None:
+    if part is None:
         raise SpecError(f"{feature.where}: kind freeform needs [part] model, found none")
-    model = load_model(str(model_path))
+    model = part.model
     face = resolve_face(feature, model)
     grid = guide_points(model, face, grid=feature.grid, counts=feature.counts,
                         spacing=feature.spacing, margin=feature.margin,
@@ -143,7 +145,7 @@ def plan_freeform(feature: FreeformSpec, model_path: Path | None, machine: Machi
     groups = _on_face(surface, groups, by_guide, left)
     record = model.faces[face - 1]
     safe_z = min(record.bbox_max[2] + r + approach + machine.margin, setup.clearance_z)
-    obstacle = obstacle_for(model_path, [])
+    obstacle = obstacle_for(part, [])
     paths: list[tuple[ir.Node, ...]] = []
     kept: list[list[PlannedTouch]] = []
     every = [group_nodes(feature.id, grp, r=r, approach=approach,

@@ -17,12 +17,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 from probegen import ir
 from probegen.errors import ModelError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.spec.actions import PlanarSpec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 ON_FACE = 1e-3
 """How far (mm) a contact point may be from the face's plane."""
@@ -41,7 +44,7 @@ class PlanarPlan:
     definition: ir.PlaneDef | ir.LineDef
 
 
-def plan_planar(feature: PlanarSpec, model_path: Path | None,
+def plan_planar(feature: PlanarSpec, part: Part | None,
                 machine: MachineProfile) -> PlanarPlan:
     """Resolve the face and plan the touches.
 
@@ -50,11 +53,10 @@ def plan_planar(feature: PlanarSpec, model_path: Path | None,
         ModelError: the face is not a plane, or a line's face is not vertical.
     """
     from probegen import cad
-    from probegen.planning.collision import load_model
 
-    if model_path is None:
+    if part is None:
         raise SpecError(f"{feature.where}: kind {feature.kind} needs [part] model, found none")
-    model = load_model(str(model_path))
+    model = part.model
     face = cad.face_by_id(model, feature.face) if feature.face else cad.face_at(
         model, feature.at or (0.0, 0.0, 0.0))
     if face.type != "plane":

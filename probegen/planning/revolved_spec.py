@@ -17,15 +17,19 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from probegen import ir
 from probegen.errors import CollisionError, ModelError, PlanningError, ProbegenError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import file_key, obstacle_for
+from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.setup import make_setup
 from probegen.spec.model import RevolvedSpec, Spec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
                 "sphere": "sphere", "torus": "torus"}
@@ -64,15 +68,14 @@ class RevolvedPlan:
         return {p.index: p.section for p in self.plan.path if p.normal is not None}
 
 
-def _model(path: Path | None, feature: RevolvedSpec) -> Any:
-    if path is None:
+def _need_part(part: Part | None, feature: RevolvedSpec) -> Part:
+    """``part``, or a SpecError for a spec without a model."""
+    if part is None:
         raise SpecError(f"{feature.where}: kind {feature.kind} needs [part] model, found none")
-    from probegen.planning.collision import load_model
-
-    return load_model(str(path))
+    return part
 
 
-def resolve_revolved(feature: RevolvedSpec, model_path: Path | None) -> ResolvedRevolved:
+def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolved:
     """Find the recognised feature and its sections.
 
     Raises:
@@ -84,10 +87,10 @@ def resolve_revolved(feature: RevolvedSpec, model_path: Path | None) -> Resolved
     from probegen import cad
     from probegen.cad.revolved import revolved_features, section_at
 
-    model = _model(model_path, feature)
-    face = cad.face_by_id(model, feature.face) if feature.face else cad.face_at(
-        model, feature.at or (0.0, 0.0, 0.0))
-    found = _features(model, revolved_features)
+    part = _need_part(part, feature)
+    face = cad.face_by_id(part.model, feature.face) if feature.face else cad.face_at(
+        part.model, feature.at or (0.0, 0.0, 0.0))
+    found = revolved_features(part)
     owner = next((f for f in found if face.id in f.faces), None)
     want = TYPE_OF_KIND[feature.kind]
     if owner is None or owner.type != want:
@@ -101,9 +104,9 @@ def resolve_revolved(feature: RevolvedSpec, model_path: Path | None) -> Resolved
                             f"{owner.reason}")
     sections: tuple[Any, ...]
     if feature.sections is None:
-        sections = _default_sections(model, owner, feature.kind, section_at)
+        sections = _default_sections(part, owner, feature.kind, section_at)
     else:
-        sections = tuple(section_at(model, owner, _axial(feature, owner, k, depth))
+        sections = tuple(section_at(part, owner, _axial(feature, owner, k, depth))
                          for k, depth in enumerate(feature.sections))
     for k, s in enumerate(sections):
         if not s.reachable:
@@ -123,7 +126,8 @@ spheres)."""
 SPHERE_SECOND = 0.75
 
 
-def _default_sections(model: Any, owner: Any, kind: str, section_at: Any) -> tuple[Any, ...]:
+def _default_sections(part: Part, owner: Any, kind: str, section_at: Any
+                      ) -> tuple[Any, ...]:
     """The reachable default sections of ``owner`` for ``kind`` (see
     :data:`DEFAULT_SECTIONS`); the recognised ones when none of these is reachable."""
     low, high = owner.extent
@@ -131,23 +135,11 @@ def _default_sections(model: Any, owner: Any, kind: str, section_at: Any) -> tup
     if kind == "cylinder":
         return recognised
     if kind == "sphere":
-        extra = section_at(model, owner, low + SPHERE_SECOND * (high - low))
+        extra = section_at(part, owner, low + SPHERE_SECOND * (high - low))
         return recognised + ((extra,) if extra.reachable else ())
-    chosen = tuple(s for s in (section_at(model, owner, low + q * (high - low))
+    chosen = tuple(s for s in (section_at(part, owner, low + q * (high - low))
                                for q in DEFAULT_SECTIONS[kind]) if s.reachable)
     return chosen or recognised
-
-
-_CACHE: dict[int, tuple[Any, tuple[Any, ...]]] = {}
-
-
-def _features(model: Any, recognise: Any) -> tuple[Any, ...]:
-    """Recognise once per loaded model (``load_model`` caches the model itself)."""
-    hit = _CACHE.get(id(model))
-    if hit is None or hit[0] is not model:
-        hit = (model, recognise(model))
-        _CACHE[id(model)] = hit
-    return hit[1]
 
 
 def top_z(feature: Any) -> float:
@@ -223,7 +215,7 @@ ALTERNATIVE_SECTIONS = {
 without ``sections`` lose touches to the collision check, in order."""
 
 
-def _candidates(resolved: ResolvedRevolved, model_path: Path | None
+def _candidates(resolved: ResolvedRevolved, part: Part | None
                 ) -> Iterator[ResolvedRevolved]:
     """The resolved feature, then (without spec sections) its alternative sections,
     each built only when asked for."""
@@ -232,11 +224,11 @@ def _candidates(resolved: ResolvedRevolved, model_path: Path | None
         return
     from probegen.cad.revolved import section_at
 
-    model = _model(model_path, resolved.spec)
+    part = _need_part(part, resolved.spec)
     f = resolved.feature
     low, high = f.extent
     for fractions in ALTERNATIVE_SECTIONS[resolved.spec.kind]:
-        sections = [section_at(model, f, low + q * (high - low)) for q in fractions]
+        sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
         if all(s.reachable for s in sections):
             ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
             yield ResolvedRevolved(resolved.spec, f, ordered)
@@ -275,10 +267,10 @@ def _touches(plan: FeaturePlan) -> int:
     return sum(1 for p in plan.path if p.normal is not None)
 
 
-def plan_revolved(feature: RevolvedSpec, model_path: Path | None, machine: MachineProfile,
+def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
                   clearance_z: float) -> RevolvedPlan:
     """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``,
-    made safe against the model (:func:`probegen.planning.reroute.reroute`).
+    made safe against the part (:func:`probegen.planning.reroute.reroute`).
 
     Tried in order until every touch is kept: the sections (the spec's or the default
     ones) with the retracts of :func:`_retracts`, then (when the spec gives no sections)
@@ -288,26 +280,23 @@ def plan_revolved(feature: RevolvedSpec, model_path: Path | None, machine: Machi
     Raises:
         PlanningError: nothing plans (the first reason).
         CollisionError: no touch can be made safe (names the move and the face).
+
+    The plan is kept on the part by (spec feature, machine, clearance level):
+    ``--all-revolved`` plans each feature to choose the spec, then the program plans the
+    spec; ``ingest`` plans the program, then each feature again.
     """
-    key = (feature, file_key(str(model_path)) if model_path else None, machine, clearance_z)
-    hit = _PLANS.get(key)
-    if hit is None:
-        hit = _PLANS[key] = _plan_revolved(feature, model_path, machine, clearance_z)
-    return hit
+    loaded = _need_part(part, feature)
+    return loaded.memo(("revolved plan", feature, machine, clearance_z),
+                       lambda: _plan_revolved(feature, loaded, machine, clearance_z))
 
 
-_PLANS: dict[tuple[Any, ...], RevolvedPlan] = {}
-"""Plans by (spec feature, model file, machine, clearance level): ``--all-revolved``
-plans each feature to choose the spec, then the program plans the spec."""
-
-
-def _plan_revolved(feature: RevolvedSpec, model_path: Path | None, machine: MachineProfile,
+def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
                    clearance_z: float) -> RevolvedPlan:
-    resolved = resolve_revolved(feature, model_path)
-    sweeper = Sweeper(obstacle_for(model_path, []), machine, machine.probe.ball_radius)
+    resolved = resolve_revolved(feature, part)
+    sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
     errors: list[ProbegenError] = []
     best: tuple[ResolvedRevolved, Rerouted] | None = None
-    for k, candidate in enumerate(_candidates(resolved, model_path)):
+    for k, candidate in enumerate(_candidates(resolved, part)):
         # other sections only with the retract that served the default ones best
         only = best[1].plan.sections[0].retract if k and best is not None else None
         safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
@@ -337,18 +326,16 @@ KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere", "tor
 """The spec kind that measures each recognised type."""
 
 
-def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, *,
+def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
                  check: bool = True) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
-    """A spec feature for every accessible revolved feature of a model that plans
+    """A spec feature for every accessible revolved feature of a part that plans
     (default sections, 8 points) and, with ``check``, whose moves clear the collision
     check on their own (:func:`check_alone`); a note for each one left out."""
     from probegen.cad.revolved import revolved_features
 
-    model = _model(model_path, RevolvedSpec("-", str(model_path), "cylinder", None, None,
-                                            None, 8, None))
     out: list[RevolvedSpec] = []
     notes: list[str] = []
-    for f in _features(model, revolved_features):
+    for f in revolved_features(part):
         fid = f"R{f.id}"
         if f.type not in KIND_OF_TYPE:
             notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not planned: a {f.type}")
@@ -356,16 +343,16 @@ def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, 
         if not f.accessible:
             notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not accessible: {f.reason}")
             continue
-        spec = RevolvedSpec(fid, f"{model_path}: revolved feature {f.id}", _kind(f),
+        spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}", _kind(f),
                             f.faces[0], None, None, 8, None)
         try:
-            planned = plan_revolved(spec, model_path, machine, clearance_z)
+            planned = plan_revolved(spec, part, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
             notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not planned: {exc}")
             continue
         if check:
             try:
-                check_alone(planned, model_path, machine, clearance_z)
+                check_alone(planned, part, machine, clearance_z)
             except CollisionError as exc:
                 notes.append(f"{fid} ({f.type}, faces {_faces(f)}): left out, it collides: "
                              f"{exc}")
@@ -374,7 +361,7 @@ def all_revolved(model_path: Path, machine: MachineProfile, clearance_z: float, 
     return tuple(out), tuple(notes)
 
 
-def check_alone(p: RevolvedPlan, model_path: Path, machine: MachineProfile,
+def check_alone(p: RevolvedPlan, part: Part, machine: MachineProfile,
                 clearance_z: float) -> None:
     """Check one planned feature's moves (from the clearance plane and back) against the
     model with the machine's margin.
@@ -382,22 +369,18 @@ def check_alone(p: RevolvedPlan, model_path: Path, machine: MachineProfile,
     Raises:
         CollisionError: a move of the feature brings the stylus into the part.
     """
-    from probegen.planning import make_setup
-    from probegen.planning.collision import check_program, obstacle_for
-    from probegen.spec.model import Spec
-
-    spec = Spec(source=str(model_path), model=model_path, machine=machine,
+    spec = Spec(source=part.path, model=Path(part.path), machine=machine,
                 dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,
                 program_name="ALL REVOLVED", features=(p.spec,))
     program = ir.Program(make_setup(spec), revolved_nodes(p, machine, clearance_z))
-    check_program(program, obstacle_for(model_path, []), [], machine)
+    check_program(program, obstacle_for(part, []), [], machine)
 
 
 CLEARANCE_ABOVE_MODEL = 10.0
 """``all_revolved_spec``: the clearance plane is at least this far above the model, mm."""
 
 
-def all_revolved_spec(model_path: Path, machine: MachineProfile) -> tuple[Spec, tuple[str, ...]]:
+def all_revolved_spec(part: Part, machine: MachineProfile) -> tuple[Spec, tuple[str, ...]]:
     """The spec of ``probegen plan MODEL --all-revolved``: every accessible cylinder, cone
     and sphere that plans and clears the collision check alone (default sections, 8
     points), the clearance plane at least ``CLEARANCE_ABOVE_MODEL`` above the model;
@@ -405,12 +388,10 @@ def all_revolved_spec(model_path: Path, machine: MachineProfile) -> tuple[Spec, 
     with no such feature gives a spec without features (an empty program) and the
     notes that say why.
     """
-    from probegen.planning.collision import load_model
-
-    top = load_model(str(model_path)).bbox_max[2]
+    top = part.bbox_max[2]
     clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
-    features, notes = all_revolved(model_path, machine, clearance)
-    spec = Spec(source=str(model_path), model=model_path, machine=machine,
+    features, notes = all_revolved(part, machine, clearance)
+    spec = Spec(source=part.path, model=Path(part.path), machine=machine,
                 dialect=machine.dialect, clearance_z=clearance, program_number=1001,
                 program_name="ALL REVOLVED", features=features)
     return spec, notes

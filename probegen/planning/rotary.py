@@ -37,9 +37,9 @@ from probegen import ir
 from probegen.errors import CollisionError
 from probegen.geometry import sphere_layout as sl
 from probegen.machine.kinematics import head_shift
-from probegen.planning import make_setup
 from probegen.planning.collision import MIN_STEP, Stylus, _sweep
 from probegen.planning.rotary_spec import RotarySpec
+from probegen.planning.setup import make_setup
 from probegen.spec.model import Spec
 
 Vec3 = tuple[float, float, float]

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from probegen.errors import ModelError, SpecError
 from probegen.geometry import sphere_layout as sl
 from probegen.machine.profile import MachineProfile
 from probegen.spec.model import SphereTest, Vec3
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,15 +68,15 @@ class SphereTestPlan:
     retract: float
 
 
-def resolve_sphere(feature: SphereTest, model_path: object | None) -> SphereGeometry:
+def resolve_sphere(feature: SphereTest, part: Part | None) -> SphereGeometry:
     """Find the nominal sphere: explicit centre, or a sphere face of the model."""
     if feature.centre is not None and feature.diameter is not None:
         return SphereGeometry(feature.centre, feature.diameter)
-    if model_path is None:
+    if part is None:
         raise SpecError(f"{feature.where}: face/at need [part] model, found none")
     from probegen import cad  # lazily: only planning from a model needs OCP
 
-    model = cad.load_step(str(model_path))
+    model = part.model
     face = cad.face_by_id(model, feature.face) if feature.face else cad.face_at(
         model, feature.at or (0.0, 0.0, 0.0))
     if face.type != "sphere" or face.radius is None or face.inner:

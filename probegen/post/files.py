@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from probegen import ir
 from probegen.dialects import get_dialect
@@ -18,9 +19,12 @@ from probegen.errors import UnsupportedError
 from probegen.files import write_file
 from probegen.ir.identity import map_identity
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import MeshObstacle, load_model
+from probegen.planning.collision import mesh_obstacle
 from probegen.post.featuremap import FeatureMap, dumps, feature_map
 from probegen.post.frontend import PostedProgram, post_dmis
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
 
 Vec3 = tuple[float, float, float]
 
@@ -39,36 +43,27 @@ class PostOutput:
     posted: PostedProgram
 
 
-def placed_obstacle(model: str | Path, offset: Vec3) -> MeshObstacle:
-    """The STEP model's mesh translated by ``offset`` (mm), as a collision obstacle."""
-    from probegen import cad
-
-    mesh = cad.tessellate(load_model(str(model))).copy()
-    mesh.apply_translation(offset)
-    return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
-
-
 def program_name(path: str | Path) -> str:
     """A program name from a file name: upper case letters and digits, at most 16."""
     return _NAME.sub("", Path(path).stem.upper())[:16] or "DMIS"
 
 
-def post_file(program: str | Path, machine: MachineProfile, model: str | Path, *,
+def post_file(program: str | Path, machine: MachineProfile, part: Part, *,
               dialect: str, offset: Vec3 = (0.0, 0.0, 0.0), skip_unsupported: bool = False,
               reroute: bool = False, number: int = 1001) -> PostOutput:
-    """Post DMIS file ``program`` for ``machine`` with the part ``model`` at ``offset``.
+    """Post DMIS file ``program`` for ``machine`` with the loaded ``part`` (the command
+    loads it: :func:`probegen.cad.load_part`) at ``offset``.
 
     Raises:
         ProgramParseError: the DMIS file does not parse.
         UnsupportedError, DmisProgramError, CollisionError: see ``post_dmis``.
-        ModelError: the model cannot be loaded.
     """
     target = get_dialect(dialect)
     if not target.RUNTIME_VARIABLES:
         raise UnsupportedError(f"post: dialect {dialect!r} is not a machine-tool dialect "
                                "with a DPRNT-style log; expected fanuc, haas or linuxcnc")
     parsed = read_dmis(program)
-    posted = post_dmis(parsed, machine, obstacle=placed_obstacle(model, offset),
+    posted = post_dmis(parsed, machine, obstacle=mesh_obstacle(part, offset),
                        skip_unsupported=skip_unsupported, reroute=reroute,
                        number=number, name=program_name(program))
     data = Path(program).read_bytes()  # read_dmis read it just now

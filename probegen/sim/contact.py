@@ -50,8 +50,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from probegen.cad import Model
-from probegen.cad.exact import ExactFaces, FloatArray, face_roots, nearest_on_surface, sphere_roots
+from probegen.cad import Model, Part
+from probegen.cad.exact import FloatArray, face_roots, nearest_on_surface, sphere_roots
 from probegen.constants import tol
 from probegen.errors import ProbegenError
 from probegen.sim.contact_parts import (
@@ -117,20 +117,23 @@ class PlacedPart:
                                    "translation")
 
     @classmethod
-    def from_model(cls, model: Model, *, rotation: ArrayLike | None = None,
+    def from_model(cls, model: Part | Model, *, rotation: ArrayLike | None = None,
                    translation: ArrayLike | None = None,
                    mesh_tolerance: float = MESH_TOLERANCE,
                    forms: tuple[FormError, ...] = ()) -> PlacedPart:
-        """Place a loaded model.
+        """Place a loaded part.
 
         Args:
-            model: the part model (:func:`probegen.cad.load_step`).
+            model: the part (:func:`probegen.cad.load_part`: its mesh at
+                ``mesh_tolerance`` and its exact face queries are built once per part and
+                shared), or a bare model (:func:`probegen.cad.load_step`, a part of its own).
             rotation: (3, 3) proper rotation, part to work frame; identity if omitted.
             translation: (3,) float, mm: where the part origin sits in the work frame.
             mesh_tolerance: chordal deviation of the tracing mesh, mm.
             forms: planted form errors of revolved faces (``sim.form``).
         """
-        return cls(_ModelSolver(model, mesh_tolerance, forms), rotation, translation)
+        part = model if isinstance(model, Part) else Part(model)
+        return cls(_ModelSolver(part, mesh_tolerance, forms), rotation, translation)
 
     @classmethod
     def from_spheres(cls, centres: ArrayLike, radii: ArrayLike, *,
@@ -259,7 +262,7 @@ class _SphereSolver(_Solver):
 class _ModelSolver(_Solver):
     """A loaded model: fcl sphere tracing on its mesh, exact solution on its faces."""
 
-    def __init__(self, model: Model, mesh_tolerance: float,
+    def __init__(self, part: Part, mesh_tolerance: float,
                  forms: tuple[FormError, ...] = ()) -> None:
         import fcl
 
@@ -268,11 +271,12 @@ class _ModelSolver(_Solver):
         if not mesh_tolerance > 0.0:
             raise ProbegenError(f"mesh tolerance: expected a positive number, found "
                                 f"{mesh_tolerance}")
+        model = part.model
         self.model = model
-        self.exact = ExactFaces(model)
+        self.exact = part.exact
         self.low = np.array([f.bbox_min for f in model.faces])
         self.high = np.array([f.bbox_max for f in model.faces])
-        mesh = cad.tessellate(model, mesh_tolerance)
+        mesh = part.mesh(mesh_tolerance)
         self.forms = {f.face - 1: BoundForm(f, cad.face_by_id(model, f.face)) for f in forms}
         # a perturbed face lies up to its limit off the mesh: every bound allows for it
         self.deviation = MESH_DEVIATION_FACTOR * mesh_tolerance + max(
