@@ -18,12 +18,6 @@ PACKAGE = REPO / "probegen"
 GROUND_LIMIT = 4
 """Modules directly under ``probegen/`` besides ``__init__.py`` (errors, constants, ...)."""
 
-KNOWN_CYCLES = {"probegen.planning"}
-"""TODO(part): planning/__init__ <-> revolved_spec <-> travel is being broken on the
-``part`` branch (the part model loaded once and passed down); once it is merged, empty
-this set: a circle inside one of these packages is not reported until then."""
-
-
 def module_names(root: Path) -> dict[str, Path]:
     """Every module under the package directory ``root``, by dotted name (a package by
     its own name, not ``.__init__``)."""
@@ -99,14 +93,10 @@ def cycles(graph: Mapping[str, set[str]]) -> list[list[str]]:
     return found
 
 
-def _inside_known(component: list[str]) -> bool:
-    return any(all(m == k or m.startswith(k + ".") for m in component) for k in KNOWN_CYCLES)
-
-
 def test_no_import_circle() -> None:
     graph = import_graph(PACKAGE)
     assert len(graph) > 100 and "probegen.errors" in graph["probegen.files"]
-    circles = [c for c in cycles(graph) if not _inside_known(c)]
+    circles = cycles(graph)
     assert circles == [], "modules importing each other (move the shared part down into a " \
                           f"module both import): {circles}"
 
