@@ -9,6 +9,8 @@ import contextlib
 import io
 import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -179,3 +181,15 @@ def test_writers_go_through_the_output_policy() -> None:
             if write.search(line) and rel not in allowed and "os.devnull" not in line:
                 found.append(f"{rel}:{k}: {line.strip()}")
     assert not found, found
+
+
+def test_the_command_line_starts_without_the_cad_kernel_or_the_templates() -> None:
+    """Building the parser (every command's start, help texts listing the dialects
+    included) loads neither OCP/build123d nor jinja2: ``capture`` and ``ingest`` on a
+    shop-floor PC start fast, and the dialect list comes from the registry alone."""
+    code = ("import sys; from probegen.cli.app import build_parser; build_parser(); "
+            "print(sorted(m for m in ('OCP', 'build123d', 'jinja2', 'trimesh') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=REPO)
+    assert out.stdout.strip() == "[]"

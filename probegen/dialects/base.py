@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any, ClassVar
-
-import jinja2
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from probegen import ir
 from probegen.constants import MM_PER_INCH, tol
 from probegen.errors import UnsupportedError, did_you_mean
 from probegen.resources import template_text
+
+if TYPE_CHECKING:
+    import jinja2
 
 REGISTRY: dict[str, type[Dialect]] = {}
 
@@ -146,7 +147,11 @@ class Dialect:
     # -- templates ------------------------------------------------------------------
     @functools.cached_property
     def env(self) -> jinja2.Environment:
-        """The Jinja environment with this dialect's filters, strict about undefined names."""
+        """The Jinja environment with this dialect's filters, strict about undefined names
+        (jinja2 is imported here, when a program is first rendered: a command that writes
+        no program, such as ``capture`` or ``ingest``, never loads it)."""
+        import jinja2
+
         env = jinja2.Environment(
             loader=jinja2.FunctionLoader(
                 lambda name: template_text(self.TEMPLATES or self.NAME, name)),
