@@ -24,7 +24,8 @@ sys.path.insert(0, str(ROOT))
 
 from probegen import cad  # noqa: E402
 from probegen.dialects import get_dialect  # noqa: E402
-from probegen.evaluate.ingest import ingest, to_table  # noqa: E402
+from probegen.evaluate.ingest import ingest  # noqa: E402
+from probegen.evaluate.outputs import to_table  # noqa: E402
 from probegen.machine.probe_model import ProbeModel  # noqa: E402
 from probegen.planning import plan_program  # noqa: E402
 from probegen.sim.contact import PlacedPart  # noqa: E402

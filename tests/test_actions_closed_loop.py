@@ -25,7 +25,8 @@ from conftest import REPO, sample_script
 from probegen import cad
 from probegen.dialects import get_dialect
 from probegen.errors import UnsupportedError
-from probegen.evaluate.ingest import ingest, to_table
+from probegen.evaluate.ingest import ingest
+from probegen.evaluate.outputs import to_table
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output

@@ -29,7 +29,8 @@ from conftest import REGEN, REPO, assert_golden, sample_script
 from probegen import cad
 from probegen.cli.app import main
 from probegen.dialects import get_dialect
-from probegen.evaluate.ingest import Ingested, ingest, to_csv, to_json, to_table
+from probegen.evaluate.ingest import Ingested, ingest
+from probegen.evaluate.outputs import to_csv, to_json, to_table
 from probegen.machine.calibration import UNCALIBRATED, ProbeCalibration, load_calibration
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.planning import plan_program

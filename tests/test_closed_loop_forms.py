@@ -39,7 +39,8 @@ from scipy.optimize import linprog
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.evaluate.ingest import ingest, nominal_of, to_json
+from probegen.evaluate.ingest import ingest, nominal_of
+from probegen.evaluate.outputs import to_json
 from probegen.evaluate.revolved import evaluate_revolved
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import part_of, plan_program

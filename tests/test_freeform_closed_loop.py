@@ -25,7 +25,8 @@ from conftest import REPO
 from probegen import cad
 from probegen.dialects import get_dialect
 from probegen.evaluate.freeform import FreeformResult
-from probegen.evaluate.ingest import ingest, ingest_dmis_freeform, to_json
+from probegen.evaluate.ingest import ingest, ingest_dmis_freeform
+from probegen.evaluate.outputs import to_json
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dmis_output

@@ -20,7 +20,8 @@ from mutations import mutate
 
 from probegen.cli.app import ExitCode, main
 from probegen.errors import ProbegenError
-from probegen.evaluate.ingest import ingest, to_csv, to_json
+from probegen.evaluate.ingest import ingest
+from probegen.evaluate.outputs import to_csv, to_json
 from probegen.machine.calibration import (
     ProbeCalibration,
     calibration_toml,

@@ -223,7 +223,8 @@ def test_only_a_whole_run_is_ok(toleranced_spec: Any, dropped: set[int], blind: 
     """Any mix of dropped touches, no-contact touches and a missing end: OK exactly when
     nothing is missing, else NOT EVALUATED (the sample meets its limits), or an error
     when no touch is left; never a traceback."""
-    from probegen.evaluate.ingest import ingest, to_csv, to_json
+    from probegen.evaluate.ingest import ingest
+    from probegen.evaluate.outputs import to_csv, to_json
 
     out = []
     for line in LOG.read_text().splitlines():

@@ -49,7 +49,7 @@ def ingested() -> Any:
 
 @pytest.fixture(scope="module")
 def results(ingested: Any) -> dict[str, Any]:
-    from probegen.evaluate.ingest import to_json
+    from probegen.evaluate.outputs import to_json
 
     doc: dict[str, Any] = json.loads(to_json(ingested))
     return doc
@@ -241,7 +241,8 @@ def decided(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any
 
     from probegen.cad import load_step
     from probegen.dialects import get_dialect
-    from probegen.evaluate.ingest import ingest, to_json
+    from probegen.evaluate.ingest import ingest
+    from probegen.evaluate.outputs import to_json
     from probegen.planning import plan_program
     from probegen.spec.model import load_spec
 
@@ -375,7 +376,7 @@ def test_importing_the_report_does_not_load_jinja() -> None:
 
 
 def _results_text(ingested: Any) -> str:
-    from probegen.evaluate.ingest import to_json
+    from probegen.evaluate.outputs import to_json
 
     return to_json(ingested)
 

@@ -32,7 +32,8 @@ def add_log_options(p: argparse.ArgumentParser) -> None:
 
 
 def _ingest(args: argparse.Namespace) -> int:
-    from probegen.evaluate.ingest import ingest, to_table, write_outputs
+    from probegen.evaluate.ingest import ingest
+    from probegen.evaluate.outputs import to_table, write_outputs
     from probegen.machine.calibration import calibration_toml, check_date, load_calibration
     from probegen.spec.model import load_spec
 
