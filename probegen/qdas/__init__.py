@@ -1,0 +1,1 @@
+"""Q-DAS AQDEF (.dfq): the exchange format SPC systems import; writer and reader."""

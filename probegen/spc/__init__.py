@@ -1,0 +1,1 @@
+"""Statistical process control on the history of a characteristic: capability and control charts."""

@@ -1,0 +1,1 @@
+"""The results store: every ingested run kept in a database (SQLite or PostgreSQL)."""
