@@ -110,6 +110,10 @@ def test_dfq_structure() -> None:
             r"\d\d\.\d\d\.\d{4}/\d\d:\d\d:\d\d", t or "") for t in times)
         serials = [v for k, j, v in fields if k == "K0014" and j == i]
         assert serials == [f"SN {1000 + n}" for n in range(runs)]
+        subgroups = [v for k, j, v in fields if k == "K0080" and j == i]
+        assert subgroups == [f"LOT-{n // 10 + 1}" for n in range(runs)]
+        positions = [v for k, j, v in fields if k == "K0081" and j == i]
+        assert positions == [str(n % 10 + 1) for n in range(runs)]
     bore = [v for k, j, v in fields if k == "K0001" and j == 1]
     assert [n for n, v in enumerate(bore) if v is None] == [7, 19]
     pin = [v for k, j, v in fields if k == "K0001" and j == 5]
@@ -261,6 +265,14 @@ def test_reader_reads_other_writers() -> None:
     assert series[0].lsl == pytest.approx(9.8) and series[0].nominal == 10.0
     assert series[1].lower is None and series[1].upper == pytest.approx(0.1)
     assert [v.status for v in series[0].values] == ["OK"]
+
+
+def test_reader_attributes_other_than_valid_are_not_values() -> None:
+    text = "K0100 1\nK1001 P\nK2101/1 1\n" + "".join(
+        f"K0001/1 1.5\nK0002/1 {a}\n" for a in (0, 129, 255, 256, 290))
+    values = dfq_series(read_dfq(text))[0].values
+    assert [v.measured for v in values] == [1.5, None, None, None, None]
+    assert [v.status for v in values] == ["-"] + ["NOT EVALUATED"] * 4
 
 
 def test_reader_value_lines() -> None:

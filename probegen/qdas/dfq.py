@@ -13,10 +13,10 @@ why are in docs/exports.md; in short:
   nominal + deviation) and ``K2112/i``/``K2113/i`` the deviations themselves, each only
   where toleranced, ``K2142/i`` the unit (``mm`` or ``°``);
 - per run and characteristic: ``K0001/i`` the value (empty, with the attribute
-  ``K0002/i 255``, when NOT EVALUATED: the value is marked missing, never invented),
-  ``K0004/i`` the date and time (``dd.mm.yyyy/hh:mm:ss``, the wall clock of the stored
-  time), ``K0006/i`` the batch (the run's subgroup), ``K0014/i`` the part ident (the
-  serial number).
+  ``K0002/i 255``, a placeholder, when NOT EVALUATED: the value is marked missing, never
+  invented), ``K0004/i`` the date and time (``dd.mm.yyyy/hh:mm:ss``, the wall clock of the
+  stored time), ``K0014/i`` the part ident (the serial number), ``K0080/i`` the subgroup
+  and ``K0081/i`` the run's position in it.
 
 The text is repeatable (no clock, fixed decimals), has Windows line ends (CRLF) and holds
 only characters of Windows-1252 (:data:`DFQ_ENCODING`), the code page Q-DAS software reads.
@@ -37,7 +37,7 @@ DFQ_ENCODING = "cp1252"
 NEWLINE = "\r\n"
 
 ATTRIBUTE_EMPTY = 255
-"""K0002 attribute of an empty value field (the value is missing: NOT EVALUATED)."""
+"""K0002 attribute "placeholder" (the value is not shown): a NOT EVALUATED value."""
 
 UNITS = {"mm": "mm", "deg": "°"}
 """Series units and the K2142 text written for them (other units are written as they are)."""
@@ -81,10 +81,24 @@ def to_dfq(series: Sequence[Series], *, part_description: str | None = None,
         lines += _characteristic(i, s, decimals)
     runs = part_runs(series)
     columns = [aligned(s, runs) for s in series]
+    positions = subgroup_positions(runs)
     for n, run in enumerate(runs):
         for i, values in enumerate(columns, start=1):
-            lines += _value(i, values[n], run, decimals)
+            lines += _value(i, values[n], run, positions[n], decimals)
     return NEWLINE.join(lines) + NEWLINE
+
+
+def subgroup_positions(runs: Sequence[Run]) -> list[int]:
+    """Each run's position in its subgroup (1, 2, ... in run order; 0 without one)."""
+    seen: dict[str, int] = {}
+    out = []
+    for run in runs:
+        if run.subgroup is None:
+            out.append(0)
+        else:
+            seen[run.subgroup] = seen.get(run.subgroup, 0) + 1
+            out.append(seen[run.subgroup])
+    return out
 
 
 def _characteristic(i: int, s: Series, decimals: int) -> list[str]:
@@ -108,19 +122,21 @@ def _characteristic(i: int, s: Series, decimals: int) -> list[str]:
     return lines
 
 
-def _value(i: int, v: Value, run: Run, decimals: int) -> list[str]:
-    """The value fields (K0xxx) of characteristic ``i`` in one run: its value or an empty
-    field marked missing, and the run's date, batch and part ident."""
+def _value(i: int, v: Value, run: Run, position: int, decimals: int) -> list[str]:
+    """The value fields (K0xxx) of characteristic ``i`` in one run: its value, or an empty
+    field marked as a placeholder; and the run's date and time, part ident (serial) and
+    subgroup (the same for every characteristic: one run measures one part)."""
     where = f"characteristic {i}, run {run.key}"
     if v.measured is None:
         lines = [f"K0001/{i}", f"K0002/{i} {ATTRIBUTE_EMPTY}"]
     else:
         lines = [f"K0001/{i} {fixed(v.measured, decimals, where)}"]
-    lines.append(f"K0004/{i} {dfq_time(v.time, where)}")
-    if v.subgroup is not None:
-        lines.append(f"K0006/{i} {text_field(f'K0006/{i}', v.subgroup)}")
-    if v.serial is not None:
-        lines.append(f"K0014/{i} {text_field(f'K0014/{i}', v.serial)}")
+    lines.append(f"K0004/{i} {dfq_time(run.time, where)}")
+    if run.serial is not None:
+        lines.append(f"K0014/{i} {text_field(f'K0014/{i}', run.serial)}")
+    if run.subgroup is not None:
+        lines.append(f"K0080/{i} {text_field(f'K0080/{i}', run.subgroup)}")
+        lines.append(f"K0081/{i} {position}")
     return lines
 
 

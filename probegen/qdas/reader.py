@@ -13,7 +13,7 @@ writers:
   characteristic of the current part (its own field wins);
 - value fields (K00xx): ``K0001/i`` starts a new value of characteristic ``i``, the other
   value fields (``K0002`` attribute, ``K0004`` date and time, ``K0006`` batch,
-  ``K0014`` part ident, ...) belong to its latest value; ``/0`` means every
+  ``K0014`` part ident, ``K0080`` subgroup, ...) belong to its latest value; ``/0`` means every
   characteristic of the current part;
 - value lines (the compact form of the value part: one line per measured part, the
   characteristics separated by the byte 0x0F, the fields of one by 0x14): of each
@@ -37,8 +37,6 @@ from datetime import datetime
 from probegen.errors import Diagnostic, ParseError
 from probegen.spc.series import Series, Value
 
-ATTRIBUTE_EMPTY = 255
-
 _FIELD = re.compile(r"K(\d{4})(?:/(\d{1,9}))?(?:[ \t](.*))?")
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d{1,4})?")
 _INTEGER = re.compile(r"[+-]?\d{1,9}")
@@ -53,7 +51,7 @@ class DfqValue:
 
     Attributes:
         measured: the value, None when the field is empty.
-        attribute: K0002 (0 when not given; 255: empty field, the value is missing).
+        attribute: K0002 (0, a valid value, when not given; 255: a placeholder).
         time: K0004 as ISO 8601 without offset (``2026-11-26T13:48:53``), None if absent.
         fields: every value field as read (``{"K0014": "S-0042"}``), K0001 included.
     """
@@ -65,8 +63,9 @@ class DfqValue:
 
     @property
     def missing(self) -> bool:
-        """True when there is no usable value (empty field or attribute 255)."""
-        return self.measured is None or self.attribute == ATTRIBUTE_EMPTY
+        """True when there is no usable value: an empty field, or an attribute other than
+        0 (valid value): 255 placeholder, 129 invalid, 256 deleted, 290 not plausible."""
+        return self.measured is None or self.attribute != 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -329,10 +328,12 @@ def dfq_series(dfq: Dfq, source: str = "<dfq>") -> list[Series]:
 
     What a DFQ file does not carry is filled plainly, never guessed: the run key is the
     value's position (``"1"``, ``"2"``, ...), the uncertainty is None, the time is the
-    K0004 wall clock without offset (``""`` when absent) and the status is derived from
-    the value and the limits as read (NOT EVALUATED for a missing value, ``-`` without
-    limits, ``OK`` within them, limits included, else ``NOT OK``).  The feature and
-    characteristic are the description (K2002, else K2001) split at its last blank.
+    K0004 wall clock without offset (``""`` when absent), the serial is K0014, the
+    subgroup K0080, and the status is derived from the value and the limits as read
+    (NOT EVALUATED for a missing value, see :attr:`DfqValue.missing`; ``-`` without
+    limits; ``OK`` within them, limits included; else ``NOT OK``).  The feature and
+    characteristic are the description (K2002, else K2001) split at its first blank
+    (probegen's feature ids hold none).
 
     Raises:
         ParseError: a part without K1001 (part number) or a characteristic without K2101
@@ -359,8 +360,7 @@ def _series(part: str, c: DfqCharacteristic, source: str) -> Series:
     lower = lower if lower is not None or lsl is None else lsl - nominal
     upper = upper if upper is not None or usl is None else usl - nominal
     text = c.fields.get("K2002") or c.fields.get("K2001") or str(c.index)
-    feature, _, name = text.rpartition(" ")
-    feature, name = (feature, name) if feature else (name, "")
+    feature, _, name = text.partition(" ")
     unit = c.fields.get("K2142", "")
     values = tuple(_value(str(n), v, lsl, usl) for n, v in enumerate(c.values, start=1))
     return Series(part, feature, name, nominal, lower, upper, UNITS_READ.get(unit, unit),
@@ -377,4 +377,4 @@ def _value(run: str, v: DfqValue, lsl: float | None, usl: float | None) -> Value
         ok = (lsl is None or lsl <= measured) and (usl is None or measured <= usl)
         status = "OK" if ok else "NOT OK"
     return Value(run, v.time or "", v.fields.get("K0014") or None, measured, None, status,
-                 v.fields.get("K0006") or None)
+                 v.fields.get("K0080") or None)
