@@ -330,6 +330,16 @@ def test_decode_dfq() -> None:
     assert decode_dfq(b"\xef\xbb\xbf" + text.encode("utf-8")) == text
 
 
+def test_dfq_file_bytes_round_trip() -> None:
+    history = _history(3)
+    text = to_dfq(history, part_description="Gehäuse Ø 25 ±0,01")
+    data = text.encode(DFQ_ENCODING)
+    assert "K2142/4 °".encode(DFQ_ENCODING) in data and b"\xb0" in data  # ° in one byte
+    dfq = read_dfq(decode_dfq(data), "history.dfq")
+    assert dfq.parts[0].fields["K1002"] == "Gehäuse Ø 25 ±0,01"
+    assert [s.unit for s in dfq_series(dfq)] == [s.unit for s in history]
+
+
 def _read_or_refuse(text: str) -> None:
     try:
         dfq = read_dfq(text, "fuzz.dfq")
@@ -358,6 +368,12 @@ def test_random_text_reads_or_refuses(text: str) -> None:
                 max_size=30))
 def test_random_k_lines_read_or_refuse(lines: list[str]) -> None:
     _read_or_refuse("\n".join(lines))
+
+
+@FUZZ
+@given(st.binary())
+def test_random_bytes_read_or_refuse(data: bytes) -> None:
+    _read_or_refuse(decode_dfq(data))
 
 
 @st.composite
