@@ -92,7 +92,7 @@ def test_dfq_structure() -> None:
     desc = {(k, i): v for k, i, v in fields if k.startswith("K2")}
     runs = 30
     for i, s in enumerate(history, start=1):
-        assert desc["K2001", i] == str(i)
+        assert desc["K2001", i] == f"{s.feature}.{s.characteristic}"  # stable, not i
         assert desc["K2002", i] == f"{s.feature} {s.characteristic}"
         assert float(desc["K2101", i]) == pytest.approx(s.nominal, abs=1e-9)
         for key, limit in (("K2110", s.lsl), ("K2111", s.usl)):

@@ -7,8 +7,11 @@ why are in docs/exports.md; in short:
 
 - ``K0100`` the number of characteristics; ``K1001/1`` the part number, ``K1002/1`` the
   part description (when given);
-- per characteristic ``i``: ``K2001/i`` its number (``i``), ``K2002/i`` its description
-  ``FEATURE CHARACTERISTIC`` (``BORE D``), ``K2022/i`` the decimal places, ``K2101/i`` the
+- per characteristic ``i``: ``K2001/i`` its number, a code that stays the same from one
+  export to the next (``BORE.D``; a running number would move when a characteristic is
+  added, and an SPC system that keys its history on K2001 would file values under the
+  wrong characteristic), ``K2002/i`` its description ``FEATURE CHARACTERISTIC``
+  (``BORE D``), ``K2022/i`` the decimal places, ``K2101/i`` the
   nominal, ``K2110/i``/``K2111/i`` the lower/upper specification limits (values:
   nominal + deviation) and ``K2112/i``/``K2113/i`` the deviations themselves, each only
   where toleranced, ``K2142/i`` the unit (``mm`` or ``°``);
@@ -48,8 +51,8 @@ def to_dfq(series: Sequence[Series], *, part_description: str | None = None,
     """The AQDEF (DFQ) text of ``series``, the characteristics of one part number.
 
     Args:
-        series: the characteristics in the order they are numbered (``K2001``), each with
-            its values; all of one part number (one DFQ file holds one part number).
+        series: the characteristics in the order they are written (``/1``, ``/2``, ...),
+            each with its values; all of one part number (one DFQ file holds one).
         part_description: written as ``K1002`` when given.
         decimals: decimal places of nominals, limits and values (also written as K2022).
 
@@ -104,7 +107,8 @@ def subgroup_positions(runs: Sequence[Run]) -> list[int]:
 def _characteristic(i: int, s: Series, decimals: int) -> list[str]:
     """The description fields (K2xxx) of characteristic number ``i``."""
     where = f"characteristic {i} ({s.feature} {s.characteristic})"
-    lines = [f"K2001/{i} {i}",
+    code = f"{s.feature}.{s.characteristic}" if s.characteristic else s.feature
+    lines = [f"K2001/{i} {text_field(f'K2001/{i}', code)}",
              f"K2002/{i} {text_field(f'K2002/{i}', f'{s.feature} {s.characteristic}')}",
              f"K2022/{i} {decimals}",
              f"K2101/{i} {fixed(s.nominal, decimals, where)}"]
