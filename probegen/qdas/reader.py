@@ -41,6 +41,8 @@ _FIELD = re.compile(r"K(\d{4})(?:/(\d{1,9}))?(?:[ \t](.*))?")
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d{1,4})?")
 _INTEGER = re.compile(r"[+-]?\d{1,9}")
 _DATE = re.compile(r"(\d{1,2})\.(\d{1,2})\.(\d{4}|\d{2})[/ ](\d{1,2}):(\d{1,2})(?::(\d{1,2}))?")
+_NUMERIC = {"K0001", "K2101", "K2110", "K2111", "K2112", "K2113"}
+_WHOLE = {"K0002", "K2022"}
 _CHAR_SEP = "\x0f"
 _FIELD_SEP = "\x14"
 
@@ -133,6 +135,20 @@ class _Reader:
         diag = Diagnostic(self.source, line, 0, message, text)
         return ParseError(str(diag), (diag,))
 
+    def check(self, key: str, value: str, number: int, text: str) -> None:
+        """Check the form of the value of a field probegen reads (numbers, dates)."""
+        if key in _NUMERIC and value:
+            if not _NUMBER.fullmatch(value) or not math.isfinite(_to_float(value)):
+                raise self.fail(number, text, f"expected a number for {key}, "
+                                              f"found {value!r}")
+        elif key in _WHOLE and value:
+            if not _INTEGER.fullmatch(value):
+                raise self.fail(number, text, f"expected a whole number for {key}, "
+                                              f"found {value!r}")
+        elif key == "K0004" and value and _iso(value) is None:
+            raise self.fail(number, text, "expected a date and time dd.mm.yyyy/hh:mm:ss "
+                                          f"for K0004, found {value!r}")
+
     def char(self, index: int, line: int, text: str) -> _Char:
         if self.count is not None and index > self.count:
             raise self.fail(line, text, f"expected a characteristic number from 1 to "
@@ -192,7 +208,7 @@ class _Reader:
 
     def char_field(self, key: str, index: int | None, value: str, number: int,
                    text: str) -> None:
-        _check(self, key, value, number, text)
+        self.check(key, value, number, text)
         if index == 0:
             self.common_char.setdefault(self.current, {})[key] = value
         else:
@@ -200,7 +216,7 @@ class _Reader:
 
     def value_field(self, key: str, index: int | None, value: str, number: int,
                     text: str) -> None:
-        _check(self, key, value, number, text)
+        self.check(key, value, number, text)
         for c in self.targets(index, number, text):
             if key == "K0001":
                 c.values.append({key: value})
@@ -237,24 +253,6 @@ class _Reader:
                           if c.part == p)
             parts.append(DfqPart(p, {**self.common_part, **self.parts[p]}, chars))
         return Dfq(self.count, tuple(parts))
-
-
-_NUMERIC = {"K0001", "K2101", "K2110", "K2111", "K2112", "K2113"}
-_WHOLE = {"K0002", "K2022"}
-
-
-def _check(reader: _Reader, key: str, value: str, number: int, text: str) -> None:
-    """Check the form of the value of a field probegen reads (numbers, dates)."""
-    if key in _NUMERIC and value:
-        if not _NUMBER.fullmatch(value) or not math.isfinite(_to_float(value)):
-            raise reader.fail(number, text, f"expected a number for {key}, found {value!r}")
-    elif key in _WHOLE and value:
-        if not _INTEGER.fullmatch(value):
-            raise reader.fail(number, text, f"expected a whole number for {key}, "
-                                            f"found {value!r}")
-    elif key == "K0004" and value and _iso(value) is None:
-        raise reader.fail(number, text, "expected a date and time dd.mm.yyyy/hh:mm:ss for "
-                                        f"K0004, found {value!r}")
 
 
 def _to_float(text: str) -> float:
