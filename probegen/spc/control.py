@@ -201,8 +201,8 @@ def _with_signals(chart: ControlChart, note: str) -> ControlChart:
     values = [p.value for p in chart.points]
     hits: list[tuple[str, tuple[int, ...]]] = []
     hits += [("beyond", (k,)) for k, v in enumerate(values) if v > chart.ucl or v < chart.lcl]
-    offset = 1 if chart.kind == "I-MR" else 0
-    hits += [("range", tuple(range(k + 1 - offset, k + 2))) for k, r in enumerate(chart.ranges)
+    pair = chart.kind == "I-MR"  # a moving range spans two points, a subgroup range one
+    hits += [("range", (k, k + 1) if pair else (k,)) for k, r in enumerate(chart.ranges)
              if r > chart.range_ucl]
     side = [1 if v > chart.centre else -1 if v < chart.centre else 0 for v in values]
     hits += [("run", span) for span in _streaks(side, RUN_LENGTH)]
