@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from probegen.spc.control import ControlChart, control_chart, evaluated
+from probegen.spc.control import ControlChart, control_chart, evaluated, mean_of
 from probegen.spc.series import Series
 
 MIN_VALUES = 10
@@ -39,6 +39,10 @@ given from 2 values."""
 U_RATIO_FLAG = 0.3
 """``u_mean / σ̂`` above which a note says the measurement uncertainty is not small
 against the process spread (u² is then more than 9 % of the observed variance)."""
+
+RESOLUTION = 1e-12
+"""A standard deviation below ``RESOLUTION · |mean|`` is rounding in float arithmetic, not
+process spread: the values count as constant (no index)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -85,8 +89,10 @@ def capability(series: Series) -> Capability:
     lsl, usl = series.lsl, series.usl
     notes: list[str] = []
     with np.errstate(all="ignore"):
-        mean = _finite(float(x.mean())) if n else None
-        overall = _finite(float(x.std(ddof=1))) if n >= 2 else None
+        # about the first value: a constant series has s = 0 exactly (x.std() would leave
+        # a rounding residue of 1e-19 and a Pp of 1e15)
+        mean = _finite(mean_of(x)) if n else None
+        overall = _finite(float((x - x[0]).std(ddof=1))) if n >= 2 else None
     chart = control_chart(series) if mean is not None and overall is not None else None
     sigma = chart.sigma if chart is not None else None
     if n < 2:
@@ -119,7 +125,7 @@ def _indices(lsl: float | None, usl: float | None, mean: float, sigma: float, n:
         return (None, None), [f"n = {n} < {MIN_VALUES}: no capability index"]
     if lsl is not None and usl is not None and not usl > lsl:
         return (None, None), ["empty tolerance zone (USL <= LSL): no capability index"]
-    if not sigma > 0.0:
+    if not sigma > RESOLUTION * abs(mean):
         return (None, None), [f"constant values ({symbol} = 0): no capability index"]
     with np.errstate(all="ignore"):
         upper = None if usl is None else _finite((usl - mean) / (3.0 * sigma))

@@ -127,6 +127,14 @@ def evaluated(series: Series) -> list[tuple[int, float]]:
     return [(i, v.measured) for i, v in enumerate(series.values) if v.measured is not None]
 
 
+def mean_of(x: Sequence[float]) -> float:
+    """The mean of ``x`` taken about its first value, so that equal values have exactly
+    their value as the mean (``np.mean`` leaves a rounding residue that would put
+    constant values off the centre line)."""
+    a = np.asarray(x, dtype=float)
+    return float(a[0] + (a - a[0]).mean())
+
+
 def control_chart(series: Series) -> ControlChart | None:
     """The chart of ``series`` (module docstring), or None with fewer than 2 evaluated
     values or when the statistics are not finite (values beyond float range)."""
@@ -169,14 +177,14 @@ def _subgroups(series: Series, values: list[tuple[int, float]],
 
 def _point(series: Series, items: Sequence[tuple[int, float]]) -> Point:
     idx = tuple(i for i, _ in items)
-    return Point(x=float(np.mean(idx)) + 1.0, value=float(np.mean([v for _, v in items])),
+    return Point(x=float(np.mean(idx)) + 1.0, value=mean_of([v for _, v in items]),
                  runs=tuple(series.values[i].run for i in idx), indices=idx)
 
 
 def _individuals(series: Series, values: list[tuple[int, float]]) -> ControlChart:
     x = np.array([v for _, v in values])
     mr = np.abs(np.diff(x))
-    centre, mr_bar = float(x.mean()), float(mr.mean())
+    centre, mr_bar = mean_of(x), float(mr.mean())
     return ControlChart(
         kind="I-MR", subgroup_size=1, points=tuple(_point(series, [item]) for item in values),
         ranges=tuple(float(r) for r in mr), centre=centre, lcl=centre - E2 * mr_bar,
@@ -189,7 +197,7 @@ def _xbar_r(series: Series, groups: list[list[tuple[int, float]]]) -> ControlCha
     k = CONSTANTS[n]
     points = tuple(_point(series, g) for g in groups)
     ranges = [max(v for _, v in g) - min(v for _, v in g) for g in groups]
-    centre, r_bar = float(np.mean([p.value for p in points])), float(np.mean(ranges))
+    centre, r_bar = mean_of([p.value for p in points]), float(np.mean(ranges))
     return ControlChart(
         kind="Xbar-R", subgroup_size=n, points=points, ranges=tuple(ranges), centre=centre,
         lcl=centre - k.a2 * r_bar, ucl=centre + k.a2 * r_bar, range_centre=r_bar,
