@@ -5,7 +5,7 @@ position in the series, oldest first; its run key, serial and time in the toolti
 tolerance limits, the nominal, the control chart's centre line and control limits
 (:mod:`probegen.spc.control`: individuals, or subgroup means over faint single values for
 an X̄-R chart), points beyond the control limits filled red, points in a run or trend
-ringed orange, NOT EVALUATED runs as grey marks on the x axis.
+ringed orange (classes ``ooc``, ``run``, ``trend`` on the point), NOT EVALUATED runs as grey marks on the x axis.
 """
 
 from __future__ import annotations
@@ -37,8 +37,8 @@ def trend_svg(series: Series) -> str:
     limits = [y for y in (series.lsl, series.usl) if y is not None]
     if chart is not None:
         limits += [chart.centre, chart.lcl, chart.ucl]
-    frame_ticks = _frame(len(series.values), [*values, *limits])
-    if not values or frame_ticks is None:
+    frame_ticks = _frame(len(series.values), [*values, *limits]) if values else None
+    if frame_ticks is None:
         why = "no evaluated value" if not values else "values beyond a chart's scale"
         return f'<p class="empty">{esc(_title(series))}: {why}, no trend chart.</p>'
     frame, xt, yt = frame_ticks
@@ -106,9 +106,14 @@ def _frame(count: int, ys: Sequence[float],
         return None
     lo, hi = min(ys), max(ys)
     span = hi - lo
-    if not math.isfinite(span) or (span > 0 and span < 1e-12 * max(abs(lo), abs(hi))):
+    if not span > 1e-12 * max(abs(lo), abs(hi)):  # constant (to float precision)
+        pad = abs(lo) * 0.1 or 1e-3
+    else:
+        pad = 0.05 * span
+    lo, hi = lo - pad, hi + pad
+    if not (math.isfinite(lo) and math.isfinite(hi) and math.isfinite(hi - lo) and hi > lo):
         return None
-    yt = nice_ticks(lo - 0.05 * span, hi + 0.05 * span)
+    yt = nice_ticks(lo, hi)
     if len(yt[0]) > 50 or not all(math.isfinite(t) for t in yt[0]):
         return None
     every = max(1, math.ceil(count / 12))
@@ -168,9 +173,10 @@ def _values(frame: Frame, series: Series, chart: ControlChart | None) -> list[st
         cls, fill, edge = "point", palette.LINE, palette.LINE
         if k in beyond:
             cls, fill, edge = "point ooc", palette.OUT_OF_CONTROL, palette.OUT_OF_CONTROL
-        if k in pattern:
-            cls, edge = cls + " trend", palette.CONTROL
         rules = [] if chart is None else sorted({s.rule for s in chart.signals if k in s.points})
+        if k in pattern:
+            cls = " ".join([cls, *(r for r in rules if r in ("run", "trend"))])
+            edge = palette.CONTROL
         tip = _tip(series, p.indices[0]) if len(p.indices) == 1 else (
             f"subgroup mean {p.value:.{DECIMALS}f} {series.unit} of runs {', '.join(p.runs)}")
         if rules:
