@@ -5,7 +5,8 @@ position in the series, oldest first; its run key, serial and time in the toolti
 tolerance limits, the nominal, the control chart's centre line and control limits
 (:mod:`probegen.spc.control`: individuals, or subgroup means over faint single values for
 an X̄-R chart), points beyond the control limits filled red, points in a run or trend
-ringed orange (classes ``ooc``, ``run``, ``trend`` on the point), NOT EVALUATED runs as grey marks on the x axis.
+ringed orange (classes ``ooc``, ``run``, ``trend`` on the point), NOT EVALUATED runs as
+grey marks on the x axis.
 """
 
 from __future__ import annotations

@@ -34,6 +34,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from probegen.spc.constants import CONSTANTS, D2_MR, D4_MR, E2
 from probegen.spc.series import Series
@@ -127,7 +128,7 @@ def evaluated(series: Series) -> list[tuple[int, float]]:
     return [(i, v.measured) for i, v in enumerate(series.values) if v.measured is not None]
 
 
-def mean_of(x: Sequence[float]) -> float:
+def mean_of(x: npt.ArrayLike) -> float:
     """The mean of ``x`` taken about its first value, so that equal values have exactly
     their value as the mean (``np.mean`` leaves a rounding residue that would put
     constant values off the centre line)."""
