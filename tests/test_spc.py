@@ -19,7 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from spc_series import make_series
 
-from probegen.spc import capability, control_chart, spc_csv, spc_rows, spc_table
+from probegen.spc import Series, capability, control_chart, spc_csv, spc_rows, spc_table
 from probegen.spc.capability import MIN_VALUES
 from probegen.spc.constants import CONSTANTS, D4_MR, E2
 from probegen.spc.control import RUN_LENGTH, TREND_LENGTH
@@ -275,7 +275,7 @@ def test_false_alarms_on_stationary_series_are_rare() -> None:
 
 # -- the table ----------------------------------------------------------------------------
 
-def _history() -> list:  # type: ignore[type-arg]
+def _history() -> list[Series]:
     drift = [*_noise(15, 2), *(0.0004 * k for k in range(1, 16))]
     return [make_series(HAND, nominal=11.0, lower=-6.0, upper=6.0, u=0.05),
             make_series(drift, feature="BORE", characteristic="X", lower=None, upper=0.01),
