@@ -51,14 +51,18 @@ def test_the_chart_is_xml_and_marks_a_planted_out_of_control_point() -> None:
     # the marked point is drawn above the UCL line
     chart = control_chart(series)
     assert chart is not None
-    ucl_y = _line_y(root, "UCL")
-    assert float(ooc[0].get("cy", "nan")) < ucl_y
+    assert float(ooc[0].get("cy", "nan")) < _line_y(root, chart.ucl)
 
 
-def _line_y(root: ET.Element, label: str) -> float:
-    """The pixel y of the limit line labelled ``label``."""
-    text = next(t for t in root.iter("text") if t.text == label)
-    return float(text.get("y", "nan")) - 4.0
+
+def _line_y(root: ET.Element, value: float) -> float:
+    """The pixel y of the limit line nearest to data ``value`` (from the y tick labels)."""
+    ticks = [(float(t.text or ""), float(t.get("y", "nan")) - 4.0) for t in root.iter("text")
+             if t.get("text-anchor") == "end"]
+    (v0, y0), (v1, y1) = ticks[0], ticks[-1]
+    at = y0 + (value - v0) * (y1 - y0) / (v1 - v0)
+    limits = [float(e.get("y1", "nan")) for e in root.iter("line") if e.get("class") == "limit"]
+    return min(limits, key=lambda y: abs(y - at))
 
 
 def test_a_planted_drift_shows_on_the_chart() -> None:

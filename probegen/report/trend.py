@@ -123,27 +123,40 @@ def _frame(count: int, ys: Sequence[float],
     return frame, xt, yt
 
 
-def _hline(frame: Frame, y: float, colour: str, label: str, *, dashed: bool = False,
-           ) -> list[str]:
-    """A horizontal line across the plot at data ``y`` with its label in the right margin."""
+def _hline(frame: Frame, y: float, colour: str, *, dashed: bool = False) -> str:
+    """A horizontal line across the plot at data ``y``."""
     left, right = frame.margin[0], frame.width - frame.margin[1]
     dash = ' stroke-dasharray="6 4"' if dashed else ""
-    return [line(left, frame.y(y), right, frame.y(y), colour, width=1.5,
-                 extra=f' class="limit"{dash}'),
-            text(right + 4, frame.y(y) + 4, label, anchor="start", size=10,
-                 extra=f' fill="{colour}"')]
+    return line(left, frame.y(y), right, frame.y(y), colour, width=1.5,
+                extra=f' class="limit"{dash}')
+
+
+LABEL_GAP = 11.0
+"""Least vertical distance between two limit labels in the right margin, px."""
 
 
 def _limit_lines(frame: Frame, series: Series, chart: ControlChart | None) -> list[str]:
-    out = _hline(frame, series.nominal, palette.MUTED, "nom", dashed=True) if (
-        frame.y_lim[0] <= series.nominal <= frame.y_lim[1]) else []
+    """The nominal, tolerance, centre and control lines, labelled in the right margin
+    (labels of lines closer than :data:`LABEL_GAP` are pushed apart, in line order)."""
+    lines: list[tuple[float, str, str, bool]] = []
+    if frame.y_lim[0] <= series.nominal <= frame.y_lim[1]:
+        lines.append((series.nominal, palette.MUTED, "nom", True))
     for value, label in ((series.lsl, "LSL"), (series.usl, "USL")):
         if value is not None:
-            out += _hline(frame, value, palette.TOLERANCE, label)
+            lines.append((value, palette.TOLERANCE, label, False))
     if chart is not None:
-        out += _hline(frame, chart.centre, palette.CENTRE, "CL")
-        out += _hline(frame, chart.lcl, palette.CONTROL, "LCL", dashed=True)
-        out += _hline(frame, chart.ucl, palette.CONTROL, "UCL", dashed=True)
+        lines += [(chart.centre, palette.CENTRE, "CL", False),
+                  (chart.lcl, palette.CONTROL, "LCL", True),
+                  (chart.ucl, palette.CONTROL, "UCL", True)]
+    out = [_hline(frame, y, colour, dashed=dashed) for y, colour, _, dashed in lines]
+    placed: list[float] = []
+    for y, colour, label, _ in sorted(lines, key=lambda item: -item[0]):
+        at = frame.y(y)
+        if placed and at < placed[-1] + LABEL_GAP:
+            at = placed[-1] + LABEL_GAP
+        placed.append(at)
+        out.append(text(frame.width - frame.margin[1] + 4, at + 4, label, anchor="start",
+                        size=10, extra=f' fill="{colour}"'))
     return out
 
 
