@@ -113,9 +113,9 @@ def test_history_section_in_the_report() -> None:
     assert "constant values" in section
     rows = re.findall(r'<tr><td>P-100</td><td>([^<]*)</td><th scope="row">D</th>', section)
     assert rows == ["BORE", "F&lt;1&gt;"]
-    assert page.replace(section, "") != plain  # the rest of the page only gains a nav link
-    assert page.count("<section") == plain.count("<section") + 1
-    assert trend_section(history) in page
+    # the rest of the page is the page without history, but for the nav link
+    assert page.replace(trend_section(history) + "\n", "", 1).replace(
+        ' <a href="#history">History</a>', "", 1) == plain
 
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False)
