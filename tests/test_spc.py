@@ -344,3 +344,20 @@ def test_any_series_ends_in_a_result(values: list[float | None], lower: float | 
     text = spc_csv([series])
     assert len(list(csv.reader(io.StringIO(text)))) == 2
     assert spc_table([series])
+
+
+def test_thirty_drifting_runs_agree_with_an_independent_computation() -> None:
+    # 30 runs of a bore, nominal 25, ±0.008: noise σ = 1 µm and a drift of 0.3 µm per run.
+    rng = np.random.default_rng(30)
+    x = 25.0 + 0.001 * rng.standard_normal(30) + 0.0003 * np.arange(30)
+    row = next(csv.DictReader(io.StringIO(spc_csv(
+        [make_series(list(x), nominal=25.0, lower=-0.008, upper=0.008)]))))
+    mean = sum(x) / 30
+    sigma = sum(abs(b - a) for a, b in zip(x[:-1], x[1:], strict=True)) / 29 / 1.128
+    cpk = min(25.008 - mean, mean - 24.992) / (3 * sigma)
+    assert float(row["mean"]) == pytest.approx(mean, abs=5e-7)
+    assert float(row["sigma"]) == pytest.approx(sigma, abs=5e-7)
+    assert float(row["cp"]) == pytest.approx(0.016 / (6 * sigma), abs=5e-4)
+    assert float(row["cpk"]) == pytest.approx(cpk, abs=5e-4)
+    assert float(row["ppk"]) < float(row["cpk"])  # the drift widens the overall spread
+    assert "trend" in row["signals"] or "run" in row["signals"]
