@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -24,7 +24,9 @@ from probegen.files import write_file
 from probegen.report import sections
 from probegen.report.model import Characteristic, Results, read_results
 from probegen.report.numbers import fixed, signed
+from probegen.report.trend import trend_section
 from probegen.resources import template_text
+from probegen.spc.series import Series
 
 if TYPE_CHECKING:
     import jinja2
@@ -34,7 +36,8 @@ DECIMALS = 4
 
 
 def render_report(results: Mapping[str, Any], *, title: str | None = None,
-                  generated: str | None = None, source: str = "results.json") -> str:
+                  generated: str | None = None, source: str = "results.json",
+                  history: Sequence[Series] = ()) -> str:
     """The HTML report of ``results`` (a parsed ``results.json``).
 
     Args:
@@ -43,6 +46,9 @@ def render_report(results: Mapping[str, Any], *, title: str | None = None,
         generated: a text for the footer (e.g. a timestamp); none by default, so the
             page is byte-for-byte repeatable.
         source: name of the results for error messages.
+        history: the characteristics' history (from the results store); when given, a
+            History section with the SPC table and a trend chart per series
+            (:func:`probegen.report.trend.trend_section`).
 
     Returns:
         The page, ``\\n`` line endings.
@@ -56,13 +62,14 @@ def render_report(results: Mapping[str, Any], *, title: str | None = None,
         views=sections.views(res),
         form={f.id: sections.form_plots(f) for f in res.features},
         calibration=sections.calibration(res), decisions=sections.decisions(res),
-        generated=generated)
+        generated=generated, history=trend_section(history) if history else "")
     return page.replace("\r\n", "\n")
 
 
 def write_report(results_json_path: str | Path, out_path: str | Path, *,
-                 title: str | None = None) -> Path:
-    """Read ``results.json``, write the report page, return its path.
+                 title: str | None = None, history: Sequence[Series] = ()) -> Path:
+    """Read ``results.json``, write the report page (with the ``history`` section when
+    given, see :func:`render_report`), return its path.
 
     Raises:
         ProbegenError: the file cannot be read or is not a results document.
@@ -81,7 +88,7 @@ def write_report(results_json_path: str | Path, out_path: str | Path, *,
     if isinstance(doc, dict) and "features" not in doc:
         raise ProbegenError(f"{src}: expected the results.json that probegen ingest wrote (with "
                             f"its 'features' list), found JSON without 'features'")
-    page = render_report(doc, title=title, source=str(src))
+    page = render_report(doc, title=title, source=str(src), history=history)
     return write_file(out, page, "the HTML report")
 
 

@@ -34,3 +34,18 @@ LINE = "#1f77b4"
 def by_sign(value: float) -> tuple[str, str]:
     """(fill, edge) for a signed residual: light when positive, dark otherwise."""
     return (LIGHT, LIGHT_EDGE) if value > 0 else (DARK, DARK_EDGE)
+
+TOLERANCE = "#d62728"
+"""Tolerance limits (LSL, USL) of the trend charts."""
+
+CONTROL = "#ff7f0e"
+"""Control limits (LCL, UCL) of the trend charts, and points in a run or trend."""
+
+CENTRE = "#2ca02c"
+"""The centre line of the trend charts."""
+
+OUT_OF_CONTROL = "#d62728"
+"""A point beyond the control limits."""
+
+MUTED = "#9a9a9a"
+"""Single values behind subgroup means, NOT EVALUATED runs."""
