@@ -278,6 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("results", help="results.json written by probegen ingest")
     rp.add_argument("-o", "--output", default="report.html", help="the HTML file")
     rp.add_argument("--title", help="title of the report")
+    rp.add_argument("--store", metavar="URL",
+                    help="add the history of the part's characteristics from this results "
+                         "store: trend charts with tolerance and control limits")
     rp.set_defaults(func=_report)
     _post_parsers(sub)
 
@@ -287,6 +290,9 @@ def build_parser() -> argparse.ArgumentParser:
     from probegen.cli.grating import add_grating_commands  # M5: probegen grating ...
 
     add_grating_commands(sub)
+    from probegen.cli.history import add_history_commands
+
+    add_history_commands(sub)
     _add_global_flags(parser, top=True)
     return parser
 

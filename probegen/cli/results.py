@@ -14,6 +14,7 @@ from probegen.files import read_input, write_file
 
 if TYPE_CHECKING:
     from probegen.evaluate.ingest import Ingested
+    from probegen.spc.series import Series
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
 """``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
@@ -172,6 +173,24 @@ def _qif(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from probegen.report import write_report
 
-    out = write_report(args.results, args.output, title=args.title)
-    print(f"wrote the report {out}")
+    history = report_history(args.results, args.store) if args.store else ()
+    out = write_report(args.results, args.output, title=args.title, history=history)
+    print(f"wrote the report {out}"
+          f"{f' with the history of {len(history)} characteristics' if history else ''}")
     return ExitCode.OK
+
+
+def report_history(results_path: str, url: str) -> list[Series]:
+    """The stored series of the part the results belong to (its part number in the
+    results' ``run`` block), or of every part when the results name none."""
+    import json
+
+    from probegen.cli.history import store_series
+
+    try:
+        doc = json.loads(read_input(results_path, "results.json"))
+    except (ProbegenError, json.JSONDecodeError):
+        return []  # the report itself names what is wrong with the results
+    run = doc.get("run") if isinstance(doc, dict) else None
+    part = run.get("part_number") if isinstance(run, dict) else None
+    return store_series(url, part=part if isinstance(part, str) and part else None)
