@@ -80,7 +80,7 @@ def _sim(args: argparse.Namespace) -> int:
     from probegen.machine.kinematics import Topology, load_machine
     from probegen.planning.rotary_spec import load_rotary_spec
     from probegen.sim.contact import PlacedPart
-    from probegen.sim.vm import VirtualMachine, run_text
+    from probegen.sim.vm import VirtualMachine, program_control, run_text
 
     spec = load_rotary_spec(args.spec)
     machine = load_machine(args.errors)
@@ -93,7 +93,7 @@ def _sim(args: argparse.Namespace) -> int:
     probe = probe_from_args(args, spec.machine.probe.ball_radius)
     text = read_input(args.program, "the rotary test program (Macro B)", encoding="ascii")
     result = run_text(text, VirtualMachine(part, probe, machine), kind="macrob",
-                      source=args.program)
+                      source=args.program, control=program_control(args.program))
     if args.output == "-":
         sys.stdout.write(result.output)
     else:
