@@ -59,7 +59,9 @@ def _plan(args: argparse.Namespace) -> int:
     from probegen.planning.rotary import plan_rotary
     from probegen.planning.rotary_spec import load_rotary_spec
 
-    plan = plan_rotary(load_rotary_spec(args.spec))
+    spec = load_rotary_spec(args.spec)
+    spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
+    plan = plan_rotary(spec)
     dialect = get_dialect(args.dialect)
     text = dialect.generate(plan.program)
     if args.output == "-":
@@ -137,7 +139,11 @@ def _write_compensation(spec: Any, shift: tuple[float, float, float], target: Pa
     from probegen.dialects import get_dialect
     from probegen.planning.rotary import compensation_program
 
-    text = get_dialect("fanuc").generate(compensation_program(spec, shift))
+    program = compensation_program(spec, shift)
+    spec.machine.check_program_number(program.setup.program_number,
+                                      f"{spec.source}: program.number + 1 (the work-offset "
+                                      "update's number)")
+    text = get_dialect("fanuc").generate(program)
     write_file(target, text, "the work-offset update", encoding="ascii")
     print(f"wrote the work-offset update {target}")
 
