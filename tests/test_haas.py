@@ -133,3 +133,18 @@ def test_sim_picks_the_haas_control_by_the_file_name(in_repo: Path, tmp_path: Pa
     assert "alarm 10 IMPROPER G-CODE (G100)" in capsys.readouterr().err
     assert main(["sim", str(renamed), "--control", "haas", "--spec", spec,
                  "-o", str(tmp_path / "renamed.log"), "-q"]) == ExitCode.OK
+
+
+def test_rotary_sim_runs_the_haas_rotary_program(in_repo: Path, tmp_path: Path) -> None:
+    """``rotary sim`` picks the Haas control by the file name as ``sim`` does: the Haas
+    M4 program gives the Fanuc program's log."""
+    spec, logs = "samples/rotary/m4.toml", []
+    for dialect in ("fanuc", "haas"):
+        out = tmp_path / dialect
+        assert main(["rotary", "plan", spec, "-d", dialect, "-o", str(out), "-q"]) == 0
+        (program,) = out.glob("m4*.nc")
+        assert main(["rotary", "sim", str(program), "--spec", spec, "--errors",
+                     "samples/machines/five-axis-bc.toml", "-o", str(out / "run.log"),
+                     "-q"]) == ExitCode.OK
+        logs.append((out / "run.log").read_text())
+    assert logs[0] == logs[1] and "PGEND" in logs[1]
