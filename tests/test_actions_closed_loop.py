@@ -195,11 +195,13 @@ def test_dmis_cannot_stop_or_correct_tools() -> None:
         get_dialect("dmis").generate(plan_program(spec, runtime_variables=False).program)
 
 
-def tweaked_text(tmp: Path, old: str, new: str) -> str:
-    """The Fanuc program of the sample spec with one edit (paths made absolute)."""
+def tweaked_text(tmp: Path, old: str, new: str, *more: tuple[str, str]) -> str:
+    """The Fanuc program of the sample spec with edits (paths made absolute)."""
     text = (REPO / SPEC).read_text()
-    assert old in text
-    text = text.replace(old, new).replace(
+    for a, b in ((old, new), *more):
+        assert a in text
+        text = text.replace(a, b)
+    text = text.replace(
         '"../machines/vmc-fanuc.toml"', f'"{REPO}/samples/machines/vmc-fanuc.toml"').replace(
         '"bore_block.step"', f'"{REPO}/samples/bore_block/bore_block.step"')
     path = tmp / "spec.toml"
@@ -214,6 +216,18 @@ def test_correction_beyond_its_maximum_stops_without_writing(
     res = run(text, models["bore+0.03"])
     assert res.alarm is not None and res.alarm.startswith("3011 BORE TOOL CORR TOO BIG")
     assert "ERR BIGCORR BORE 12" in res.output and D_WEAR_12 not in res.variables
+
+
+def test_a_long_feature_id_keeps_its_alarm_within_26_characters(
+        tmp_path: Path, models: dict[str, cad.Model]) -> None:
+    """``HOUSINGBORE1 TOOL CORR TOO BIG`` (30 characters) would not fit a Fanuc alarm:
+    the text takes its short form, the id stays whole (docs/actions.md)."""
+    text = tweaked_text(tmp_path, "max = 0.1", "max = 0.01",
+                        ('id = "BORE"', 'id = "HOUSINGBORE1"'))
+    assert "#3000=11(HOUSINGBORE1 BIGCORR)" in text
+    res = run(text, models["bore+0.03"])
+    assert res.alarm is not None and res.alarm.startswith("3011 HOUSINGBORE1 BIGCORR")
+    assert "ERR BIGCORR HOUSINGBORE1 12" in res.output
 
 
 @pytest.mark.parametrize(("feedback", "dead_band", "wear"),

@@ -9,14 +9,14 @@ import pytest
 from conftest import REPO
 
 from probegen import ir
+from probegen.cli.app import ExitCode, main
 from probegen.dialects import Fanuc, Haas, get_dialect
 from probegen.errors import UnsupportedError
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
 from probegen.results import parse_dprnt
 from probegen.sim.contact import PlacedPart
-from probegen.sim.macrob.machine import Settings, run_program
-from probegen.sim.vm import HOME, VirtualMachine
+from probegen.sim.vm import VirtualMachine, program_control, run_text
 from probegen.spec.model import load_spec
 
 SPECS = sorted(p for p in (REPO / "samples").glob("*/*.toml")
@@ -83,18 +83,68 @@ def test_reserved_variable_ranges_are_refused(base: int, reserved: str) -> None:
 
 
 def test_haas_program_runs_on_the_virtual_machine(in_repo: Path) -> None:
-    """The Haas text measures as Fanuc's does; the VM reads Haas G100 as Fanuc G50.1."""
+    """The Haas text measures on a Haas control as Fanuc's does on a Fanuc control; each
+    stops on the other's control with alarm 10 at its reset block (line 7)."""
     spec = load_spec(Path("samples/sphere25/sphere_test_iso.toml"))
     program = plan_program(spec, runtime_variables=True).program
+    texts = {name: get_dialect(name).generate(program) for name in ("fanuc", "haas")}
     logs = []
-    for name, aliases in (("fanuc", {}), ("haas", {100.0: 50.1})):
-        part = PlacedPart.from_spheres([[0.1, -0.2, 0.05]], [12.5])
-        vm = VirtualMachine(part, ProbeModel(3.0))
-        res = run_program(get_dialect(name).generate(program), vm,
-                          variables={11020: 0.0, 10020: 0.0},
-                          settings=Settings(home=HOME, g_aliases=aliases))
+    for name in ("fanuc", "haas"):
+        res = run_text(texts[name], vm(), kind="macrob", control=name)
         assert res.alarm is None, res.alarm
         logs.append(parse_dprnt(res.output, strict=True))
     fanuc, haas = logs
     assert len(haas.touches) == 25 and haas.complete
     assert [t.xyz for t in haas.touches] == [t.xyz for t in fanuc.touches]
+    for name, control, word in (("haas", "fanuc", "G100"), ("fanuc", "haas", "G15")):
+        res = run_text(texts[name], vm(), kind="macrob", control=control)
+        assert res.alarm == f"10 IMPROPER G-CODE ({word}) (line 7)" and res.touches == 0
+
+
+def vm() -> VirtualMachine:
+    """A 25 mm sphere near the origin, a 3 mm ball."""
+    return VirtualMachine(PlacedPart.from_spheres([[0.1, -0.2, 0.05]], [12.5]), ProbeModel(3.0))
+
+
+@pytest.mark.parametrize(("block", "alarm"), [
+    ("G100", None), ("G50", None), ("G69", None), ("G101 X0 Y0", "9010"),
+    ("G50.1", "10"), ("G15", "10"), ("G16", "10"), ("G51.1 X0", "10")])
+def test_the_haas_control_knows_the_haas_g_codes(block: str, alarm: str | None) -> None:
+    """Haas G-code list: G100/G101 cancel/set mirror image (G101 is not modelled: 9010),
+    no G50.1/G51.1, no polar coordinates G15/G16 (alarm 10, as the control's)."""
+    res = run_text(f"%\nO1\nG21 G90\n{block}\nM30\n%\n", vm(), kind="macrob",
+                   control="haas")
+    assert (None if res.alarm is None else res.alarm.split()[0]) == alarm, res.alarm
+
+
+def test_sim_picks_the_haas_control_by_the_file_name(in_repo: Path, tmp_path: Path,
+                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    spec = "samples/sphere25/sphere_test_iso.toml"
+    assert main(["compile", spec, "-d", "haas", "-o", str(tmp_path), "-q"]) == ExitCode.OK
+    program = tmp_path / "sphere_test_iso.haas.nc"
+    assert program_control(program) == "haas"
+    assert main(["sim", str(program), "--spec", spec, "-o", str(tmp_path / "run.log"),
+                 "-q"]) == ExitCode.OK
+    assert "PGEND" in (tmp_path / "run.log").read_text()
+    renamed = tmp_path / "O01002.nc"
+    renamed.write_bytes(program.read_bytes())
+    capsys.readouterr()
+    assert main(["sim", str(renamed), "--spec", spec, "-o", "-", "-q"]) == ExitCode.SIM_ALARM
+    assert "alarm 10 IMPROPER G-CODE (G100)" in capsys.readouterr().err
+    assert main(["sim", str(renamed), "--control", "haas", "--spec", spec,
+                 "-o", str(tmp_path / "renamed.log"), "-q"]) == ExitCode.OK
+
+
+def test_rotary_sim_runs_the_haas_rotary_program(in_repo: Path, tmp_path: Path) -> None:
+    """``rotary sim`` picks the Haas control by the file name as ``sim`` does: the Haas
+    M4 program gives the Fanuc program's log."""
+    spec, logs = "samples/rotary/m4.toml", []
+    for dialect in ("fanuc", "haas"):
+        out = tmp_path / dialect
+        assert main(["rotary", "plan", spec, "-d", dialect, "-o", str(out), "-q"]) == 0
+        (program,) = out.glob("m4*.nc")
+        assert main(["rotary", "sim", str(program), "--spec", spec, "--errors",
+                     "samples/machines/five-axis-bc.toml", "-o", str(out / "run.log"),
+                     "-q"]) == ExitCode.OK
+        logs.append((out / "run.log").read_text())
+    assert logs[0] == logs[1] and "PGEND" in logs[1]

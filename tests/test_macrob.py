@@ -17,6 +17,7 @@ from probegen.errors import ProbegenError, ProgramParseError
 from probegen.results import parse_dprnt
 from probegen.sim.alarms import SimAlarm
 from probegen.sim.macrob import ast
+from probegen.sim.macrob.base import control_settings
 from probegen.sim.macrob.dprnt import format_value
 from probegen.sim.macrob.machine import (
     FreeMachine,
@@ -33,7 +34,7 @@ DATA = TESTS / "data" / "macrob"
 REF = Path(__file__).resolve().parents[2] / "shared" / "ref" / "macro-b"
 REF_FILES = tuple(sorted(REF.glob("*.NC")))
 GOLDENS = tuple(sorted((TESTS / "golden").glob("*/*.nc")))
-HAAS = Settings(g_aliases={100: 50.1})
+HAAS = control_settings("haas")
 """Haas goldens cancel mirror imaging with G100 where Fanuc writes G50.1."""
 
 

@@ -31,6 +31,7 @@ from probegen.cli.results import _PARITY, _capture, _ingest, _qif, _report, add_
 from probegen.errors import ExitCode, ProbegenError
 from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
+from probegen.sim.macrob.base import CONTROLS
 
 
 def _sim(args: argparse.Namespace) -> int:
@@ -49,7 +50,13 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     from probegen.machine.kinematics import load_machine
     from probegen.sim.contact import PlacedPart
     from probegen.sim.serial_play import PtyLink
-    from probegen.sim.vm import VirtualMachine, control_state, program_kind, run_text
+    from probegen.sim.vm import (
+        VirtualMachine,
+        control_state,
+        program_control,
+        program_kind,
+        run_text,
+    )
 
     part, ball = _sim_part(args)
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
@@ -74,7 +81,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
-        result = run_text(text, vm, kind=program_kind(args.program), source=args.program)
+        result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
+                          control=args.control or program_control(args.program))
     data = result.output.encode("ascii", errors="replace")
     if isinstance(link, PtyLink):
         print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
@@ -246,6 +254,8 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--part", help="the part model (STEP)")
     sm.add_argument("--machine", help="machine profile (TOML)")
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
+    sm.add_argument("--control", choices=tuple(CONTROLS),
+                    help="the Macro B control (default: haas for a .haas.nc file, else fanuc)")
     sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",

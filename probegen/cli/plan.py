@@ -24,6 +24,7 @@ def _compile(args: argparse.Namespace) -> int:
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
+    spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
     names = args.dialect or [spec.dialect]
     part: Part | None = None
     outputs = []

@@ -59,7 +59,9 @@ def _plan(args: argparse.Namespace) -> int:
     from probegen.planning.rotary import plan_rotary
     from probegen.planning.rotary_spec import load_rotary_spec
 
-    plan = plan_rotary(load_rotary_spec(args.spec))
+    spec = load_rotary_spec(args.spec)
+    spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
+    plan = plan_rotary(spec)
     dialect = get_dialect(args.dialect)
     text = dialect.generate(plan.program)
     if args.output == "-":
@@ -80,7 +82,7 @@ def _sim(args: argparse.Namespace) -> int:
     from probegen.machine.kinematics import Topology, load_machine
     from probegen.planning.rotary_spec import load_rotary_spec
     from probegen.sim.contact import PlacedPart
-    from probegen.sim.vm import VirtualMachine, run_text
+    from probegen.sim.vm import VirtualMachine, program_control, run_text
 
     spec = load_rotary_spec(args.spec)
     machine = load_machine(args.errors)
@@ -93,7 +95,7 @@ def _sim(args: argparse.Namespace) -> int:
     probe = probe_from_args(args, spec.machine.probe.ball_radius)
     text = read_input(args.program, "the rotary test program (Macro B)", encoding="ascii")
     result = run_text(text, VirtualMachine(part, probe, machine), kind="macrob",
-                      source=args.program)
+                      source=args.program, control=program_control(args.program))
     if args.output == "-":
         sys.stdout.write(result.output)
     else:
@@ -137,7 +139,11 @@ def _write_compensation(spec: Any, shift: tuple[float, float, float], target: Pa
     from probegen.dialects import get_dialect
     from probegen.planning.rotary import compensation_program
 
-    text = get_dialect("fanuc").generate(compensation_program(spec, shift))
+    program = compensation_program(spec, shift)
+    spec.machine.check_program_number(program.setup.program_number,
+                                      f"{spec.source}: program.number + 1 (the work-offset "
+                                      "update's number)")
+    text = get_dialect("fanuc").generate(program)
     write_file(target, text, "the work-offset update", encoding="ascii")
     print(f"wrote the work-offset update {target}")
 

@@ -45,6 +45,11 @@ class Fanuc(MacroB):
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
     """The G code for each unit system."""
 
+    def check_lines(self, text: str) -> None:
+        """Line length and characters, and the length of every alarm message."""
+        super().check_lines(text)
+        self.check_messages(text)
+
     # -- lowering -----------------------------------------------------------------
     def lower(self, program: ir.Program) -> dict[str, Any]:
         s = program.setup

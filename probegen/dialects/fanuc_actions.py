@@ -24,6 +24,7 @@ the angle in a common variable.
 from __future__ import annotations
 
 from probegen.dialects.macro_b import MacroB
+from probegen.errors import UnsupportedError
 from probegen.ir.actions import Align, Check, SetWorkOffset, UpdateTool, result
 
 OUT_OF_TOLERANCE_ALARM = 10
@@ -36,6 +37,30 @@ ANGLE_FORMAT = "26"
 """DPRNT digits of an angle in degrees (2 + 6: 17 nrad; a + b <= 8 on the control)."""
 TOOL_LINE = {"radius": 13, "length": 11}
 """G10 L number of each wear offset (memory C: L11 H wear, L13 D wear)."""
+SHORT_TEXTS = {"OUT OF TOL": "OUTTOL", "NO CIRCLE FIT": "BADFIT",
+               "TOOL CORR TOO BIG": "BIGCORR"}
+"""Each alarm text's short form (the ``ERR`` word of its DPRNT line), used when the
+feature id and the whole text do not fit the dialect's ``ALARM_TEXT_LENGTH``."""
+
+
+def alarm_text(d: MacroB, feature: str, text: str) -> str:
+    """The message ``<feature> <text>`` of an alarm, within ``d.ALARM_TEXT_LENGTH``.
+
+    The feature id is never cut (the operator must know which feature stopped the
+    machine): when the whole message is too long the text takes its short form
+    (``SHORT_TEXTS``: ``BORE TOOL CORR TOO BIG`` but ``HOUSINGBORE1 BIGCORR``).
+
+    Raises:
+        UnsupportedError: even the short form does not fit (a limit below 20 characters
+            with a 12-character id).
+    """
+    for words in (text, SHORT_TEXTS[text]):
+        message = f"{feature} {words}"
+        if len(message) <= d.ALARM_TEXT_LENGTH:
+            return message
+    raise UnsupportedError(f"dialect {d.NAME!r}: feature {feature}: expected an alarm message "
+                           f"of at most {d.ALARM_TEXT_LENGTH} characters, found "
+                           f"{len(message)}: {message!r}; use a shorter feature id")
 
 
 def lower_action(d: MacroB, node: Check | SetWorkOffset | UpdateTool | Align) -> list[str]:
@@ -132,7 +157,8 @@ class _Checker:
         self.emit(f"{det}=2*[{suu}*{svv}-{suv}*{suv}]",
                   f"IF[ABS[{det}]GT0]GOTO{label}",
                   f"DPRNT[ERR*BADFIT*{n.feature}*1]",
-                  f"#3000={BAD_FIT_ALARM}({n.feature} NO CIRCLE FIT)", f"N{label}",
+                  f"#3000={BAD_FIT_ALARM}({alarm_text(d, n.feature, 'NO CIRCLE FIT')})",
+                  f"N{label}",
                   f"{uc}=[{suq}*{svv}-{svq}*{suv}]/{det}",
                   f"{vc}=[{svq}*{suu}-{suq}*{suv}]/{det}")
         x, y, dia = self.r("X"), self.r("Y"), self.r("D")
@@ -220,7 +246,7 @@ class _Checker:
         label = self.d.next_label()
         stop = (f"#3000={OUT_OF_TOLERANCE_ALARM}" if n.on_fail == "alarm" else "#3006=1")
         self.emit(f"IF[{ng}EQ0]GOTO{label}", f"DPRNT[ERR*OUTTOL*{n.feature}*1]",
-                  f"{stop}({n.feature} OUT OF TOL)", f"N{label}")
+                  f"{stop}({alarm_text(self.d, n.feature, 'OUT OF TOL')})", f"N{label}")
 
 
 def minus(d: MacroB, value: float, decimals: int | None = None) -> str:
@@ -265,7 +291,7 @@ def update_tool(d: MacroB, node: UpdateTool) -> list[str]:
         f"IF[ABS[{c}]LT{d.length(node.dead_band)}]THEN{c}=0",
         f"IF[ABS[{c}]LE{d.length(node.max_correction)}]GOTO{ok}",
         f"DPRNT[ERR*BIGCORR*{node.feature}*{node.tool}]",
-        f"#3000={BIG_CORRECTION_ALARM}({node.feature} TOOL CORR TOO BIG)",
+        f"#3000={BIG_CORRECTION_ALARM}({alarm_text(d, node.feature, 'TOOL CORR TOO BIG')})",
         f"N{ok}",
         f"DPRNT[RES*{node.feature}*T{node.tool}*C{c}[{fmt}]]",
         f"IF[{c}EQ0]GOTO{skip}",

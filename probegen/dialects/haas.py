@@ -37,6 +37,9 @@ class Haas(Fanuc):
     WIPS probe; #709 is the fixture-clamp input).  #150-#199 hold probe results when a
     probe is installed: writing them only overwrites the last results."""
 
+    # ALARM_TEXT_LENGTH: Fanuc's 26 characters, inherited: not checked against a Haas
+    # manual; a message that short shows whole on any Macro B control.
+
     RADIUS_WEAR_FACTOR: ClassVar[float] = 2.0
     """Haas G10 L12/L13 write the tool *diameter* geometry/wear (with Setting 40, Tool
     Offset Measure, at its default Diameter): a radius correction is doubled."""

@@ -9,14 +9,18 @@ N1001; feeds are printed in program units per minute with a decimal point.
 
 from __future__ import annotations
 
+import re
 from typing import ClassVar
 
 from probegen import ir
 from probegen.constants import tol
 from probegen.dialects.base import Dialect
+from probegen.errors import UnsupportedError
 
 SCRATCH = 90
 """Offset of the scratch variables (three targets and one check sum) from the base."""
+MESSAGE = re.compile(r"#300[06]=[^(]*\(([^)]*)\)")
+"""A macro alarm or stop with its message (the message is group 1)."""
 
 
 class MacroB(Dialect):
@@ -28,6 +32,11 @@ class MacroB(Dialect):
     RADIUS_WEAR_FACTOR: ClassVar[float] = 1.0
     """What a radius correction is multiplied by in ``G10 L13`` (Fanuc memory C: the D
     offset is a radius)."""
+    ALARM_TEXT_LENGTH: ClassVar[int] = 26
+    """Longest message of ``#3000=n(TEXT)`` and ``#3006=n(TEXT)``, characters: 26 on the
+    Fanuc 0i series (a longer one is cut on the alarm screen, and some controls refuse
+    the block); ``fanuc_actions.alarm_text`` keeps probegen's texts within it and
+    :meth:`check_messages` refuses any longer one."""
     CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
     """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
     skip did not fire: the end point itself is rounded to the least input increment."""
@@ -64,6 +73,20 @@ class MacroB(Dialect):
         """A fresh block number for a forward GOTO."""
         self.label += 1
         return self.label
+
+    def check_messages(self, text: str) -> None:
+        """Refuse a ``#3000``/``#3006`` message longer than ``ALARM_TEXT_LENGTH``.
+
+        Raises:
+            UnsupportedError: names the line, the message and the limit.
+        """
+        for number, line in enumerate(text.split("\n"), start=1):
+            found = MESSAGE.match(line)
+            if found and len(found[1]) > self.ALARM_TEXT_LENGTH:
+                raise UnsupportedError(
+                    f"dialect {self.NAME!r}: line {number}: expected an alarm message of at "
+                    f"most {self.ALARM_TEXT_LENGTH} characters, found {len(found[1])}: "
+                    f"{found[1]!r}")
 
     def feed(self, mm_per_min: float) -> str:
         """A feed in program units per minute, with the decimal point Fanuc wants."""

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.constants import MM_PER_INCH
+from probegen.errors import SpecError
 from probegen.files import Table, load_toml
 
 if TYPE_CHECKING:
@@ -68,6 +69,8 @@ class Controller:
         reset_codes: modal codes the header sets so that nothing is left to chance
             (plane, cutter and length compensation off, canned cycles off, feed per
             minute, rotation off...); drop a code the control lacks the option for.
+        program_numbers: the O numbers probegen may give a program, ``(first, last)``
+            (``[controller] program_numbers``; default :func:`default_program_numbers`).
     """
 
     line_length: int
@@ -76,9 +79,23 @@ class Controller:
     probe_off: tuple[str, ...]
     tool_change: bool
     reset_codes: tuple[str, ...]
+    program_numbers: tuple[int, int] = (1, 8999)
 
 
 DEFAULT_RESET = ("G17", "G40", "G49", "G80", "G94", "G69")
+PROTECTED = (9000, 9999)
+"""Program numbers Fanuc controls protect (parameter NE9) and Haas controls lock
+(setting 23, 9xxx programs edit lock): a shop's own macros and the probe maker's cycles
+live there, so probegen stays out unless the profile's ``program_numbers`` lets it in."""
+PROGRAM_NUMBER_MAX = 9999
+"""Highest program number of a spec (four digits, which every control reads)."""
+
+
+def default_program_numbers(dialect: str) -> tuple[int, int]:
+    """The program numbers a profile without ``program_numbers`` allows: below
+    :data:`PROTECTED` for a Fanuc or Haas machine, any for the others (LinuxCNC and DMIS
+    use the number as a name only)."""
+    return (1, PROTECTED[0] - 1) if dialect in ("fanuc", "haas") else (1, PROGRAM_NUMBER_MAX)
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,6 +132,28 @@ class MachineProfile:
     """The probe calibration the in-process actions are compiled with (the spec's
     ``[machine] calibration`` or ``compile --calibration``), or None: nominal radius."""
 
+    def check_program_number(self, number: int, where: str) -> None:
+        """Refuse a program number outside ``controller.program_numbers``.
+
+        Args:
+            number: the O number a program is to get.
+            where: what set it, for the message (``spec.toml: program.number``).
+
+        Raises:
+            SpecError: ``number`` is outside the range; the message names both keys
+                and, for O9000-O9999, why they are kept out.
+        """
+        first, last = self.controller.program_numbers
+        if first <= number <= last:
+            return
+        why = (f": O{PROTECTED[0]}-O{PROTECTED[1]} are protected on Fanuc and Haas controls "
+               "(editing locked), the shop's own macros live there"
+               if PROTECTED[0] <= number <= PROTECTED[1] else "")
+        raise SpecError(f"{where}: expected a program number in O{first}-O{last} (the "
+                        f"machine's range, {self.source}: controller.program_numbers), found "
+                        f"{number}{why}; to use it, set [controller] program_numbers = "
+                        "[first, last] in the machine profile to a range that holds it")
+
 
 def load_profile(path: str | Path) -> MachineProfile:
     """Load and validate a machine profile; errors name the file and key path."""
@@ -123,16 +162,17 @@ def load_profile(path: str | Path) -> MachineProfile:
     m = root.table("machine", required=True)
     units = m.get_str("units", "mm", choices=("mm", "inch")) or "mm"
     k = MM_PER_INCH if units == "inch" else 1.0
+    dialect = m.get_str("dialect", "fanuc") or "fanuc"
     profile = MachineProfile(
         name=m.get_str("name", required=True) or "",
-        dialect=m.get_str("dialect", "fanuc") or "fanuc",
+        dialect=dialect,
         units=units,
         work_offset=m.get_str("work_offset", "G54", choices=WORK_OFFSETS) or "G54",
         clearance_z=k * (m.get_float("clearance_z", required=True) or 0.0),
         margin=k * (m.get_float("margin", 0.5, positive=True) or 0.5),
         probe=_probe(root.table("probe", required=True), k),
         feeds=_feeds(root.table("feeds", required=True), k),
-        controller=_controller(root.table("controller")),
+        controller=_controller(root.table("controller"), dialect),
         source=file,
         uncertainty=_uncertainty(root.table("uncertainty"), k),
     )
@@ -175,7 +215,7 @@ def _uncertainty(t: Table, k: float) -> StatedUncertainty:
                              None if probe is None else k * probe)
 
 
-def _controller(t: Table) -> Controller:
+def _controller(t: Table, dialect: str) -> Controller:
     c = Controller(
         line_length=t.get_int("line_length", 80, minimum=40, maximum=256) or 80,
         variable_base=t.get_int("variable_base", 100, minimum=100, maximum=900) or 100,
@@ -183,6 +223,21 @@ def _controller(t: Table) -> Controller:
         probe_off=t.get_str_list("probe_off", ()),
         tool_change=t.get_bool("tool_change", True),
         reset_codes=t.get_str_list("reset_codes", DEFAULT_RESET),
+        program_numbers=_program_numbers(t, dialect),
     )
     t.done()
     return c
+
+
+def _program_numbers(t: Table, dialect: str) -> tuple[int, int]:
+    """``program_numbers = [first, last]``: whole numbers, 1 <= first <= last <= 9999."""
+    value = t.get_any("program_numbers")
+    if value is None:
+        return default_program_numbers(dialect)
+    ok = (isinstance(value, list) and len(value) == 2
+          and all(isinstance(v, int) and not isinstance(v, bool) for v in value)
+          and 1 <= value[0] <= value[1] <= PROGRAM_NUMBER_MAX)
+    if not ok:
+        raise t.fail("program_numbers", f"[first, last] program numbers with "
+                                        f"1 <= first <= last <= {PROGRAM_NUMBER_MAX}")
+    return value[0], value[1]

@@ -239,7 +239,7 @@ HOME: Vec3 = (0.0, 0.0, 500.0)
 
 def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<program>",
              tool: int = 20, home: Vec3 = HOME,
-             work_offset: Vec3 = (0.0, 0.0, 0.0)) -> SimResult:
+             work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc") -> SimResult:
     """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -250,6 +250,9 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         tool: the probe's tool number (its length offset is set to 0).
         home: where the ball centre is when the program starts (machine coordinates).
         work_offset: the G54 offset the control holds (Macro B only), mm.
+        control: the Macro B control the machine has, a key of
+            ``sim.macrob.base.CONTROLS`` (``"fanuc"``, ``"haas"``; see
+            :func:`program_control`).
     """
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
@@ -257,12 +260,13 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
         return SimResult(dres.output, alarm, len(vm.touches))
-    from probegen.sim.macrob.machine import Settings, run_program
+    from probegen.sim.macrob.base import control_settings
+    from probegen.sim.macrob.machine import run_program
 
     variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
                  11000 + tool: 0.0, 10000 + tool: 0.0}
     res = run_program(text, vm, source=source, variables=variables,
-                      settings=Settings(home=home))
+                      settings=control_settings(control, home=home))
     alarm = None
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"
@@ -306,3 +310,9 @@ def _alarm_text(a: SimAlarm) -> str:
 def program_kind(path: str | Path) -> str:
     """``"dmis"`` for .dmi/.dms/.dmis files, else ``"macrob"``."""
     return "dmis" if Path(path).suffix.lower() in (".dmi", ".dms", ".dmis") else "macrob"
+
+
+def program_control(path: str | Path) -> str:
+    """The control a Macro B program file is for, by its name: ``"haas"`` for the Haas
+    dialect's ``.haas.nc``, else ``"fanuc"`` (``probegen sim --control`` overrides)."""
+    return "haas" if Path(path).name.lower().endswith(".haas.nc") else "fanuc"

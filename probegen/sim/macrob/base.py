@@ -11,8 +11,8 @@ numbered from 9000.  Macro alarms raised by the program itself (``#3000 = n``) a
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Protocol
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
 
 from probegen.sim.alarms import SimAlarm
 
@@ -93,6 +93,9 @@ class Settings:
         g_aliases: G codes of a builder's control read as Fanuc codes, e.g.
             ``{100: 0, 131: 31}`` runs Brother programs whose G100 (tool change with
             positioning) and G131 (skip) should move as G0 and G31 here.
+        g_missing: Fanuc G codes the builder's control does not have: alarm 10
+            (IMPROPER G-CODE) as for any unknown code (checked as written, before
+            ``g_aliases``).
     """
 
     dprnt_blanks: bool = False
@@ -103,7 +106,32 @@ class Settings:
     max_nesting: int = 10
     max_macro_nesting: int = 5
     g_aliases: Mapping[float, float] = field(default_factory=dict)
+    g_missing: frozenset[float] = frozenset()
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+CONTROLS: Mapping[str, Settings] = {
+    "fanuc": Settings(),
+    "haas": Settings(g_aliases={100.0: 50.1, 101.0: 51.1},
+                     g_missing=frozenset({15.0, 16.0, 50.1, 51.1})),
+}
+"""The controls the virtual machine can be (``probegen sim --control``).
+
+``haas``: a Haas mill (classic and NGC) runs Fanuc Macro B, but its G-code list cancels
+mirror image with G100 (G101 sets it; group 0) where Fanuc writes G50.1 (G51.1), and has
+no polar-coordinate mode (G15/G16): G100 and G101 are read as G50.1 and G51.1 (which
+the virtual machine does not model: alarm 9010), and G15, G16, G50.1 and G51.1 as written
+are alarm 10, as on the machine (``dialects/haas.py`` writes the same words)."""
+
+
+def control_settings(control: str, **changes: Any) -> Settings:
+    """The settings of the virtual ``control`` (a key of :data:`CONTROLS`) with
+    ``changes`` (other :class:`Settings` fields, e.g. ``home``) applied.
+
+    Raises:
+        KeyError: ``control`` is not a key of :data:`CONTROLS`.
+    """
+    return replace(CONTROLS[control], **changes)
 
 
 Point = tuple[float, float, float]

@@ -23,7 +23,8 @@ Supported: G0 G1 G31 (skip) G4 G10 (L2, L20, L1/L10-L13) G28 G53 G17-G19 G20 G21
 G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G68 (G17 only) G69 G80 G90
 G91 G94 G96-G99 G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42,
 scaling G51, canned cycles, G52, G92, G95 ...) raise alarm 9010 (not supported by
-the virtual machine); a G code Fanuc does not have raises alarm 10.  Axes other than
+the virtual machine); a G code Fanuc does not have raises alarm 10, and so does one
+the builder's control lacks (``Settings.g_missing``; ``base.CONTROLS``).  Axes other than
 X, Y, Z, B, C raise alarm 9010: a dropped move would crash a real machine.
 
 Rotary axes (a five-axis B/C machine: B the 4th axis, C the 5th), in degrees:
@@ -232,6 +233,10 @@ class Motion:
         """Apply the modal G codes of a block; return its one-shot code (G4/10/28/31/53)."""
         one_shot = None
         before = (self.modal[6], self.modal[14], self.modal[8])
+        missing = self.settings.g_missing
+        for value in values:
+            if missing and round(value, 1) in missing:
+                raise alarm(IMPROPER_G_CODE, f"G{value:g}")
         aliases = self.settings.g_aliases
         if aliases:
             values = [aliases.get(value, value) for value in values]
