@@ -20,7 +20,8 @@ from mutations import mutate
 
 from probegen.cli.app import ExitCode, main
 from probegen.errors import ProbegenError
-from probegen.evaluate.ingest import ingest, to_csv, to_json
+from probegen.evaluate.ingest import identified, ingest, to_csv, to_json
+from probegen.evaluate.run_identity import IdentityOptions
 from probegen.machine.calibration import (
     ProbeCalibration,
     calibration_toml,
@@ -47,7 +48,10 @@ def test_sample_log_reproduces_the_planted_truth(in_repo: Path) -> None:
 
 
 def test_results_files_are_golden(in_repo: Path) -> None:
-    result = ingest(LOG, load_spec(SPEC))
+    spec = load_spec(SPEC)
+    who = IdentityOptions(part_number="SPH-25", serial="S001", operator="A. Smith",
+                          time="2026-11-26T13:48:53+01:00", batch="B1")
+    result = identified(ingest(LOG, spec), spec, who)
     assert_golden(REPO / "tests/golden/ingest/results.json", to_json(result))
     assert_golden(REPO / "tests/golden/ingest/results.csv", to_csv(result))
 

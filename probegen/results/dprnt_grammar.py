@@ -39,7 +39,8 @@ from probegen.results.dprnt_records import (
 _UPPER = {c: c - 32 for c in range(ord("a"), ord("z") + 1)}
 """ASCII-only upper-casing: ``str.upper`` would turn 'ſ' into 'S'."""
 
-_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "PGSERIAL", "LOC", "CTR", "PT", "RES", "ERR", "PGEND"})
+_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "PGSERIAL", "LOC", "CTR", "PT", "RES", "ERR",
+                              "PGEND"})
 """The keywords that start a record."""
 
 _NAMES = {
