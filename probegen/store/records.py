@@ -87,9 +87,9 @@ def part_of(identity: RunIdentity) -> str:
 
 def rows_of(ingested: Ingested) -> tuple[Row, ...]:
     """Every characteristic of the run, in results.json order: the evaluated features'
-    (status under the run's decision rule), then the NOT EVALUATED features' toleranced
-    characteristics with ``measured`` None (the nominal of a partial fit when there was
-    one)."""
+    (status under the run's decision rule), then the NOT EVALUATED features'
+    characteristics with ``measured`` None: those of the partial fit where there was one
+    (its nominal kept, its values not), and every toleranced one the spec asks for."""
     rows: list[Row] = []
     kinds = _kinds(ingested)
     for result in ingested.evaluated:
@@ -98,13 +98,15 @@ def rows_of(ingested: Ingested) -> tuple[Row, ...]:
                             _unit(c.name), c.nominal, c.lower, c.upper, c.measured, c.u,
                             status_of(c.accepted(ingested.rule))))
     for n in ingested.not_evaluated:
-        partial = {c.name: c for c in n.partial.characteristics} if n.partial else {}
-        for name, (lower, upper) in zip(n.characteristics, n.limits, strict=True):
-            known = partial.get(name)
+        limits = dict(zip(n.characteristics, n.limits, strict=True))
+        partial = n.partial.characteristics if n.partial is not None else ()
+        named = [(c.name, c.nominal, limits.get(c.name, (c.lower, c.upper))) for c in partial]
+        named += [(name, None, limits[name]) for name in n.characteristics
+                  if name not in {c.name for c in partial}]
+        for name, nominal, (lower, upper) in named:
             toleranced = lower is not None or upper is not None
-            rows.append(Row(n.feature, n.kind, name, _unit(name),
-                            None if known is None else known.nominal, lower, upper, None,
-                            None, NOT_EVALUATED if toleranced else UNTOLERANCED))
+            rows.append(Row(n.feature, n.kind, name, _unit(name), nominal, lower, upper,
+                            None, None, NOT_EVALUATED if toleranced else UNTOLERANCED))
     return tuple(rows)
 
 
