@@ -7,8 +7,8 @@ part-to-part size scatter, and the probe has a trigger noise.  Each log is inges
 serial ``S001`` ... ``S030``, times one hour apart from :data:`START`, batches of five.
 It is cached for the test session (one simulation, however many modules use it).
 
-:func:`store_url` (the ``store_url`` fixture, parametrised ``sqlite`` and ``postgresql``)
-gives an empty store of each backend: PostgreSQL from ``$PROBEGEN_TEST_PG_URL``, that half
+:func:`empty_store` (for a fixture parametrised with :data:`BACKENDS`) gives an empty
+store of each backend: PostgreSQL from ``$PROBEGEN_TEST_PG_URL``, that half
 skipped with a message where the variable is unset or the server does not answer.
 """
 
@@ -139,9 +139,11 @@ def postgres_url() -> str:
     return url
 
 
-@pytest.fixture(params=["sqlite", "postgresql"])
-def store_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
-    """An empty store of each backend (see the module docstring)."""
-    if request.param == "sqlite":
-        return str(tmp_path / "store.db")
-    return postgres_url()
+BACKENDS = ("sqlite", "postgresql")
+"""The store backends a test runs on (parametrise a ``store_url`` fixture with them)."""
+
+
+def empty_store(backend: str, folder: Path) -> str:
+    """The URL of an empty store of ``backend``: a SQLite file in ``folder``, or the
+    PostgreSQL test server (:func:`postgres_url`, which may skip)."""
+    return str(folder / "store.db") if backend == "sqlite" else postgres_url()

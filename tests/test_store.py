@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 from conftest import REPO
-from history import DRIFT, RUNS, postgres_url, simulated, store_url  # noqa: F401
+from history import BACKENDS, DRIFT, RUNS, empty_store, postgres_url, simulated
 
 from probegen.cli.app import main
 from probegen.evaluate.characteristics import NOT_EVALUATED
 from probegen.evaluate.ingest import Ingested, identified, ingest
 from probegen.evaluate.run_identity import IdentityOptions
+from probegen.spc.series import Series
 from probegen.spec.model import load_spec
 from probegen.store import StoreError, open_store
 from probegen.store import db as store_db
@@ -26,6 +27,12 @@ LOG = SAMPLE / "sphere_test.log"
 WHO = IdentityOptions(part_number="SPH-25", serial="S7", operator="A. Smith",
                       time="2026-11-26T13:48:53+01:00", batch="B1")
 TOLERANCE = "tolerance = { form = 0.004, size = 0.004, position = 0.05 }\n"
+
+
+@pytest.fixture(params=BACKENDS)
+def store_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
+    """An empty store on SQLite, then on PostgreSQL."""
+    return empty_store(request.param, tmp_path)
 
 
 def spec_variant(folder: Path, tolerance: str = "", name: str = "spec.toml") -> Path:
@@ -184,25 +191,33 @@ def test_cli_ingest_records_the_run_once(in_repo: Path, tmp_path: Path,
     assert len(err.strip().splitlines()) == 1  # one line, no traceback
 
 
-def test_history_gives_the_same_series_on_sqlite_and_postgresql(tmp_path: Path) -> None:
-    pg = postgres_url()  # skips with a message without a server
+def stored_history(url: str) -> list[Series]:
+    """The 30 runs recorded in the store at ``url`` (plus one of them again): its series."""
     history = simulated()
-    found = []
-    for url in (str(tmp_path / "history.db"), pg):
-        with open_store(url) as store:
-            keys = [store.add_run(r, r.run)[0] for r in history.runs]  # type: ignore[arg-type]
-            assert len(set(keys)) == RUNS and store.runs() == keys
-            again = history.runs[4]
-            assert store.add_run(again, again.run) == (keys[4], False)  # type: ignore[arg-type]
-            assert len(store.runs()) == RUNS
-            found.append(store.series())
-    sqlite, postgres = found
-    assert sqlite == postgres
-    (d,) = [s for s in sqlite if (s.feature, s.characteristic) == ("BORE", "D")]
+    with open_store(url) as store:
+        keys = [store.add_run(r, r.run)[0] for r in history.runs]  # type: ignore[arg-type]
+        assert len(set(keys)) == RUNS and store.runs() == keys
+        again = history.runs[4]
+        assert store.add_run(again, again.run) == (keys[4], False)  # type: ignore[arg-type]
+        assert len(store.runs()) == RUNS  # re-ingesting a log leaves 30 runs
+        return store.series()
+
+
+def test_history_keeps_30_runs_and_shows_the_drift(tmp_path: Path) -> None:
+    history = simulated()
+    series = stored_history(str(tmp_path / "history.db"))
+    (d,) = [s for s in series if (s.feature, s.characteristic) == ("BORE", "D")]
     assert (d.part, d.nominal, d.lower, d.upper) == ("O1002", 50.0, 0.0, 0.025)
     assert [v.serial for v in d.values] == [f"S{i:03d}" for i in range(1, RUNS + 1)]
+    assert [v.subgroup for v in d.values[:6]] == ["B1"] * 5 + ["B2"]
     measured = np.array([v.measured for v in d.values])
     assert np.allclose(measured, history.diameters, atol=0.002)
     slope = np.polyfit(np.arange(RUNS), measured, 1)[0]
     assert slope == pytest.approx(DRIFT, rel=0.25)  # the planted drift shows
-    assert [v.status for v in d.values][-1] == "NOT OK"
+    assert d.values[-1].status == "NOT OK" and d.values[0].status == "OK"
+    assert all(len(s.values) == RUNS for s in series)
+
+
+def test_history_gives_the_same_series_on_sqlite_and_postgresql(tmp_path: Path) -> None:
+    postgres = stored_history(postgres_url())  # skips with a message without a server
+    assert stored_history(str(tmp_path / "history.db")) == postgres
