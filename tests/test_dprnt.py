@@ -187,6 +187,7 @@ def test_feature_id_like_keywords() -> None:
 
 HEAD = "PGSTART O1001 V1\n"
 
+RECORD = "a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND)"
 MALFORMED = [
     ("PT SPH1 13 X1 Y2", 17, "expected 'Z', found end of line"),
     ("PT SPH1 1 X1.5.5 Y2 Z3", 15, "expected 'Y', found '.5'"),
@@ -199,12 +200,8 @@ MALFORMED = [
     ("PT 1A 1 X1 Y2 Z3", 4, "expected a feature id, found '1A'"),
     ("PT", 3, "expected a feature id, found end of line"),
     ("PT SPH1 12 X- Y2 Z3", 15, "expected a number, found 'Y2'"),
-    (
-        "PTX SPH1 1 X1 Y2 Z3",
-        1,
-        "expected a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
-    ),
-    ("%PX 1", 2, "expected a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
+    ("PTX SPH1 1 X1 Y2 Z3", 1, f"expected {RECORD}, found 'PTX'"),
+    ("%PX 1", 2, f"expected {RECORD}, found 'PX'"),
     ("ERR NOTUCH SPH1 1", 5,
      "expected an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT), found 'NOTUCH'"),
     ("ERR NOTOUCH SPH1", 17, "expected an index, found end of line"),

@@ -100,7 +100,8 @@ def rows_of(ingested: Ingested) -> tuple[Row, ...]:
     for n in ingested.not_evaluated:
         limits = dict(zip(n.characteristics, n.limits, strict=True))
         partial = n.partial.characteristics if n.partial is not None else ()
-        named = [(c.name, c.nominal, limits.get(c.name, (c.lower, c.upper))) for c in partial]
+        named: list[tuple[str, float | None, tuple[float | None, float | None]]] = [
+            (c.name, c.nominal, limits.get(c.name, (c.lower, c.upper))) for c in partial]
         named += [(name, None, limits[name]) for name in n.characteristics
                   if name not in {c.name for c in partial}]
         for name, nominal, (lower, upper) in named:
