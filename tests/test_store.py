@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 from conftest import REPO
+from fuzzing import examples
 from history import BACKENDS, DRIFT, RUNS, empty_store, postgres_url, simulated
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen.cli.app import main
 from probegen.evaluate.characteristics import NOT_EVALUATED
@@ -221,3 +224,20 @@ def test_history_keeps_30_runs_and_shows_the_drift(tmp_path: Path) -> None:
 def test_history_gives_the_same_series_on_sqlite_and_postgresql(tmp_path: Path) -> None:
     postgres = stored_history(postgres_url())  # skips with a message without a server
     assert stored_history(str(tmp_path / "history.db")) == postgres
+
+
+@settings(max_examples=examples(200))
+@given(st.sampled_from(["postgresql", "postgresql+psycopg", "sqlite", "mysql", "http", ""]),
+       st.text(alphabet="abc:@/?=.%+ -_19", max_size=24),
+       st.text(alphabet="xyz:@/.19", max_size=12))
+def test_a_random_url_is_read_or_refused_and_never_shows_its_password(
+        scheme: str, user: str, rest: str) -> None:
+    url = f"{scheme}://{user}:Pw0rd7@{rest}"
+    try:
+        target, shown = store_db._url(url)
+    except StoreError as exc:
+        message = str(exc)
+    else:
+        message = shown
+        assert target.get_backend_name() in ("sqlite", "postgresql")
+    assert "Pw0rd7" not in message

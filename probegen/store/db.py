@@ -74,8 +74,11 @@ class Store:
         try:
             with self.engine.begin() as conn:
                 return key, _write(conn, record, rows)
-        except IntegrityError:  # recorded meanwhile by another writer: the same run
-            return key, False
+        except IntegrityError as exc:  # recorded meanwhile by another writer: the same run
+            if key in self.runs():
+                return key, False
+            raise StoreError(f"{self.url}: expected to record run {key}, the database "
+                             f"refused: {_reason(exc)}; nothing of the run was kept") from exc
         except SQLAlchemyError as exc:
             raise StoreError(f"{self.url}: expected to record run {key}, the database "
                              f"refused: {_reason(exc)}; nothing of the run was kept") from exc
@@ -197,7 +200,7 @@ def open_store(url: str) -> Store:
     try:
         engine = create_engine(target, connect_args=CONNECT.get(target.get_backend_name(),
                                                                 {}))
-    except (ArgumentError, ImportError) as exc:
+    except (ArgumentError, ValueError, ImportError) as exc:
         raise StoreError(f"store {shown}: expected a database URL probegen can open, "
                          f"found {exc}") from None
     try:
@@ -224,13 +227,13 @@ def _url(url: str) -> tuple[URL, str]:
         if path.is_dir():
             raise StoreError(f"store {url}: expected a SQLite file, found a folder")
         return URL.create("sqlite", database=os.fspath(path.resolve())), url
+    shown = _mask(url)
     try:
         target = make_url(url)
-    except ArgumentError:
-        raise StoreError(f"store {_mask(url)}: expected a path, sqlite:///FILE or "
+    except (ArgumentError, ValueError):  # ValueError: a port that is not a number
+        raise StoreError(f"store {shown}: expected a path, sqlite:///FILE or "
                          "postgresql://USER:PASSWORD@HOST/DATABASE, found a URL that "
                          "does not parse") from None
-    shown = target.render_as_string(hide_password=True)
     scheme, _, driver = target.drivername.partition("+")
     if scheme not in SCHEMES:
         raise StoreError(f"store {shown}: expected "
@@ -247,9 +250,10 @@ def _url(url: str) -> tuple[URL, str]:
 
 
 def _mask(url: str) -> str:
-    """``url`` with the password between ``:`` and ``@`` of its authority masked."""
+    """``url`` as the user wrote it, everything between the first ``:`` after the scheme's
+    ``//`` and the last ``@`` masked (the password, however oddly the URL is written)."""
     scheme, sep, rest = url.partition("://")
-    auth, at, host = rest.partition("@")
+    auth, at, host = rest.rpartition("@")
     if at and ":" in auth:
         auth = auth.split(":", 1)[0] + ":***"
     return scheme + sep + auth + at + host
