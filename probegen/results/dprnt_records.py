@@ -213,10 +213,11 @@ class DprntLog:
 
     @property
     def serial(self) -> str | None:
-        """The serial number the log's last run printed (``PGSERIAL``, the last one read
-        in that run), or None."""
-        last = self.runs[-1].number if self.runs else 0
-        marks = [s.serial for s in self.serials if s.run == last]
+        """The serial number the log printed (``PGSERIAL``): the last one read in its
+        runs (after :func:`~probegen.results.logcheck.select_runs`, the runs read: a
+        resumed run whose serial was printed before the cut counts), or None."""
+        numbers = {r.number for r in self.runs}
+        marks = [s.serial for s in self.serials if s.run in numbers or not numbers]
         return marks[-1] if marks else None
 
     def latest_touches(self) -> tuple[Touch, ...]:
