@@ -187,6 +187,7 @@ def test_feature_id_like_keywords() -> None:
 
 HEAD = "PGSTART O1001 V1\n"
 
+RECORD = "a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND)"
 MALFORMED = [
     ("PT SPH1 13 X1 Y2", 17, "expected 'Z', found end of line"),
     ("PT SPH1 1 X1.5.5 Y2 Z3", 15, "expected 'Y', found '.5'"),
@@ -199,12 +200,8 @@ MALFORMED = [
     ("PT 1A 1 X1 Y2 Z3", 4, "expected a feature id, found '1A'"),
     ("PT", 3, "expected a feature id, found end of line"),
     ("PT SPH1 12 X- Y2 Z3", 15, "expected a number, found 'Y2'"),
-    (
-        "PTX SPH1 1 X1 Y2 Z3",
-        1,
-        "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PTX'",
-    ),
-    ("%PX 1", 2, "expected a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND), found 'PX'"),
+    ("PTX SPH1 1 X1 Y2 Z3", 1, f"expected {RECORD}, found 'PTX'"),
+    ("%PX 1", 2, f"expected {RECORD}, found 'PX'"),
     ("ERR NOTUCH SPH1 1", 5,
      "expected an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT), found 'NOTUCH'"),
     ("ERR NOTOUCH SPH1", 17, "expected an index, found end of line"),
@@ -436,3 +433,38 @@ def test_pgcal_names_the_programs_calibration() -> None:
     bad = parse_dprnt("PGSTART O1003 V1\nPGCAL\nPGEND O1003\n")
     assert bad.calibrations == () and len(bad.diagnostics) == 1
     assert bad.diagnostics[0].line == 2
+
+
+def test_pgserial_names_the_parts_serial() -> None:
+    log = parse_dprnt("PGSTART O1003 V1\nPGSERIAL   4711.\nPT B 1 X1. Y2. Z3.\nPGEND O1003\n"
+                      "PGSTART O1003 V1\npgserial sn-0042/b\nPGEND O1003\n")
+    assert [(m.serial, m.line, m.run) for m in log.serials] == [("4711", 2, 0),
+                                                                ("SN-0042/B", 6, 1)]
+    assert log.serial == "SN-0042/B" and not log.diagnostics
+    long = "PGSTART O1003 V1\nPGSERIAL " + "9" * 33 + "\nPGEND O1003\n"
+    bad = parse_dprnt(long)
+    assert bad.serials == () and bad.serial is None
+    assert [(d.line, d.column) for d in bad.diagnostics] == [(2, 10)]
+    assert "at most 32 characters" in bad.diagnostics[0].message
+    empty = parse_dprnt("PGSTART O1003 V1\nPGSERIAL\nPGEND O1003\n")
+    assert "expected a serial number" in empty.diagnostics[0].message
+
+
+SERIAL_LOG = ("PGSTART O1001 V1\nPGSERIAL SN-0042\nPT SPH1 1 X1. Y2. Z3.\nPGEND O1001\n"
+              "PGSTART O1001 V1\nPGSERIAL 4711.\nPGEND O1001\n")
+
+
+@st.composite
+def mutated_serial_log(draw: st.DrawFn) -> str:
+    return mutate(draw, SERIAL_LOG, "PGSERIAL0123456789.-_/ \n\t%é")
+
+
+@FUZZ
+@given(mutated_serial_log())
+def test_mutated_serial_lines_give_a_serial_or_a_diagnostic(text: str) -> None:
+    _parse_both(text)
+    log = parse_dprnt(text)
+    allowed = set("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._/-")
+    for mark in log.serials:
+        assert 1 <= len(mark.serial) <= 32 and set(mark.serial) <= allowed
+    assert log.serial is None or log.serial in {m.serial for m in log.serials}

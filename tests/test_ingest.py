@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import tempfile
@@ -20,8 +21,9 @@ from mutations import mutate
 
 from probegen.cli.app import ExitCode, main
 from probegen.errors import ProbegenError
-from probegen.evaluate.ingest import ingest
+from probegen.evaluate.ingest import identified, ingest
 from probegen.evaluate.outputs import to_csv, to_json
+from probegen.evaluate.run_identity import IdentityOptions
 from probegen.machine.calibration import (
     ProbeCalibration,
     calibration_toml,
@@ -48,7 +50,10 @@ def test_sample_log_reproduces_the_planted_truth(in_repo: Path) -> None:
 
 
 def test_results_files_are_golden(in_repo: Path) -> None:
-    result = ingest(LOG, load_spec(SPEC))
+    spec = load_spec(SPEC)
+    who = IdentityOptions(part_number="SPH-25", serial="S001", operator="A. Smith",
+                          time="2026-11-26T13:48:53+01:00", batch="B1")
+    result = identified(ingest(LOG, spec), spec, who)
     assert_golden(REPO / "tests/golden/ingest/results.json", to_json(result))
     assert_golden(REPO / "tests/golden/ingest/results.csv", to_csv(result))
 
@@ -185,3 +190,29 @@ def test_mutated_calibration_files_load_or_fail_cleanly(data: st.DataObject) -> 
             return
     assert calibration_toml(cal).startswith("# Probe calibration")
     assert np.all(np.isfinite(cal.radius([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])))
+
+
+def test_run_identity_from_the_log_the_spec_and_the_options(tmp_path: Path) -> None:
+    lines = LOG.read_text().splitlines(keepends=True)
+    start = next(i for i, line in enumerate(lines) if line.startswith("PGSTART"))
+    log = tmp_path / "run.log"
+    log.write_text("".join([*lines[:start + 1], "PGSERIAL   4711.\n", *lines[start + 1:]]))
+    os.utime(log, (1_764_164_933, 1_764_164_933))  # 2025-11-26T13:48:53Z
+    spec = load_spec(SPEC)
+    spec = dataclasses.replace(spec, part_number="4711-020-A", part_name="Sphere artefact")
+    run = identified(ingest(log, spec), spec).run
+    assert run is not None
+    assert (run.serial, run.time, run.part_number, run.part_name, run.program) == (
+        "4711", "2025-11-26T13:48:53+00:00", "4711-020-A", "Sphere artefact",
+        "O1001 H2DAFDB55")
+    assert run.machine == spec.machine.name and run.operator is None
+    given = IdentityOptions(serial=" S9 ", part_number="P-1", operator="B. Jones",
+                            time="2026-01-02T03:04:05.678-05:00", batch="7")
+    run = identified(ingest(log, spec), spec, given).run
+    assert run is not None
+    assert (run.serial, run.part_number, run.operator, run.time, run.batch) == (
+        "S9", "P-1", "B. Jones", "2026-01-02T03:04:05-05:00", "7")
+    for bad, message in (("2026-01-02", "expected a UTC offset"),
+                         ("yesterday", "expected an ISO 8601 date and time")):
+        with pytest.raises(ProbegenError, match=message):
+            identified(ingest(log, spec), spec, IdentityOptions(time=bad))

@@ -20,7 +20,8 @@ from conftest import REPO, SHARED, assert_golden
 
 import probegen.qif.export
 from probegen.errors import ProbegenError
-from probegen.evaluate.ingest import Ingested, ingest
+from probegen.evaluate.ingest import Ingested, identified, ingest
+from probegen.evaluate.run_identity import IdentityOptions
 from probegen.qif.export import (
     SCHEMA_ENV,
     QifValidationError,
@@ -99,6 +100,35 @@ def test_sphere_results_validate_against_the_schema(schema: Path, sphere: Ingest
     ing, spec = sphere
     validate_qif(ingested_to_qif(ing, spec=spec), schema=schema)
     validate_qif(ingested_to_qif(ing), schema=schema)  # without the spec: probe from the radius
+
+
+def test_the_run_identity_is_in_the_qif_places(schema: Path, sphere: Ingest) -> None:
+    ing, spec = sphere
+    spec = dataclasses.replace(spec, part_number="4711-020-A", part_name="Sphere artefact")
+    who = IdentityOptions(serial="S0042", operator="A. Smith", batch="LOT 7",
+                          time="2026-11-26T13:48:53+01:00")
+    text = ingested_to_qif(identified(ing, spec, who), spec=spec)
+    validate_qif(text, schema=schema)
+    root = _root(text)
+    part = root.find(".//q:Product/q:PartSet/q:Part", NS)
+    assert part is not None
+    assert part.findtext("q:Header/q:Name", namespaces=NS) == "Sphere artefact"
+    assert part.findtext("q:ModelNumber", namespaces=NS) == "4711-020-A"
+    results = root.find(".//q:MeasurementResults", NS)
+    assert results is not None
+    trace = results.find("q:InspectionTraceability", NS)
+    assert trace is not None
+    assert trace.findtext("q:InspectionStart", namespaces=NS) == "2026-11-26T12:48:53Z"
+    assert trace.findtext("q:InspectionOperator/q:Name", namespaces=NS) == "A. Smith"
+    labels = {a.get("name"): a.get("value") for a in results.findall("q:Attributes/*", NS)}
+    assert labels["program"] == "O1001 H2DAFDB55"
+    assert labels["machine"] == spec.machine.name
+    component = root.find(".//q:ActualComponentSets/q:ActualComponentSet/q:ActualComponent",
+                          NS)
+    assert component is not None
+    assert component.findtext("q:SerialNumber", namespaces=NS) == "S0042"
+    assert component.findtext("q:Traceability/q:LotNumber", namespaces=NS) == "LOT 7"
+    assert results.findtext("q:ActualComponentIds/q:Id", namespaces=NS) == component.get("id")
 
 
 def test_sphere_values_equal_the_ingest_results(sphere: Ingest) -> None:

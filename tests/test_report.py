@@ -221,6 +221,29 @@ def test_title_and_generated_text_are_injected(results: dict[str, Any]) -> None:
     assert "<footer>Made by probegen.</footer>" in render_report(results)
 
 
+RUN = {"part_number": "4711-020-A", "part_name": "Sphere artefact", "serial": "S0042",
+       "operator": "A. Smith", "machine": "Generic VMC", "program": "O1001 H2DAFDB55",
+       "time": "2026-11-26T13:48:53+01:00", "batch": None, "calibration": None}
+
+
+def test_header_names_the_part_serial_operator_machine_program_and_date(
+        results: dict[str, Any]) -> None:
+    by_log = f"<title>probegen report: {results['source']}</title>"
+    assert by_log in render_report(results)  # no run block: the log names the page
+    html = render_report({**results, "run": RUN})
+    assert "<title>Inspection report 4711-020-A Sphere artefact, serial S0042</title>" in html
+    header = html[html.index('<dl class="run"'):html.index("</dl>")]
+    fields = re.findall(r"<dt>(.*?)</dt><dd>(.*?)</dd>", header)
+    assert fields == [("date", "2026-11-26T13:48:53+01:00"), ("part number", "4711-020-A"),
+                      ("part", "Sphere artefact"), ("serial", "S0042"),
+                      ("operator", "A. Smith"), ("machine", "Generic VMC"),
+                      ("program", "O1001 H2DAFDB55")]
+    without_number = render_report({**results, "run": {**RUN, "part_number": None}})
+    assert by_log in without_number
+    with pytest.raises(ProbegenError, match=re.escape("run.serial: expected a string, found 7")):
+        render_report({**results, "run": {**RUN, "serial": 7}})
+
+
 def test_user_text_is_escaped(results: dict[str, Any]) -> None:
     doc = json.loads(json.dumps(results))
     doc["features"][0]["id"] = "</script><b>&"

@@ -27,7 +27,15 @@ from probegen import __version__
 from probegen.cli.options import dialect_help, finite, non_negative, positive
 from probegen.cli.plan import _compile, _features, _plan, _sphere_points, _target
 from probegen.cli.probe import add_probe_options, probe_from_args
-from probegen.cli.results import _PARITY, _capture, _ingest, _qif, _report, add_log_options
+from probegen.cli.results import (
+    _PARITY,
+    _capture,
+    _ingest,
+    _qif,
+    _report,
+    add_identity_options,
+    add_log_options,
+)
 from probegen.errors import ExitCode, ProbegenError
 from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
@@ -229,6 +237,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="ISO 14253-1 decision rule: simple acceptance or guard_band by U "
                         "(default: the spec's [evaluation] decision_rule, else simple)")
     add_log_options(i)
+    add_identity_options(i)
+    i.add_argument("--store", metavar="URL",
+                   help="also record the run in a results store: a SQLite file (path or "
+                        "sqlite:///FILE) or postgresql://USER:PASSWORD@HOST/DB "
+                        "(docs/store.md)")
     i.set_defaults(func=_ingest)
 
     cp = sub.add_parser("capture", help="record what the machine sends on a serial port")
@@ -282,6 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--schema", help="QIFDocument.xsd (default: $PROBEGEN_QIF_SCHEMA)")
     q.add_argument("-o", "--output", default="results.qif", help="the QIF file")
     add_log_options(q)
+    add_identity_options(q)
     q.set_defaults(func=_qif)
 
     rp = sub.add_parser("report", help="one self-contained HTML report from results.json")

@@ -14,6 +14,7 @@ from probegen.files import read_input, write_file
 
 if TYPE_CHECKING:
     from probegen.evaluate.ingest import Ingested
+    from probegen.evaluate.run_identity import IdentityOptions
     from probegen.spc.series import Series
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
@@ -32,8 +33,31 @@ def add_log_options(p: argparse.ArgumentParser) -> None:
                         "spec's (a warning goes into every output)")
 
 
+def add_identity_options(p: argparse.ArgumentParser) -> None:
+    """The run's identity (``docs/results.md``, "The run"): part number, serial, operator,
+    time, batch."""
+    p.add_argument("--part-number", metavar="TEXT",
+                   help="the part number (default: the spec's [part] number)")
+    p.add_argument("--serial", metavar="TEXT",
+                   help="the part's serial number (default: the log's PGSERIAL line)")
+    p.add_argument("--operator", metavar="TEXT", help="who measured")
+    p.add_argument("--time", metavar="ISO8601",
+                   help="when the part was measured, with its UTC offset "
+                        "(2026-11-26T13:48:53+01:00; default: the log file's "
+                        "modification time, never the clock)")
+    p.add_argument("--batch", metavar="TEXT", help="the batch or subgroup of the part")
+
+
+def identity_options(args: argparse.Namespace) -> IdentityOptions:
+    """The identity options of ``add_identity_options``."""
+    from probegen.evaluate.run_identity import IdentityOptions
+
+    return IdentityOptions(part_number=args.part_number, serial=args.serial,
+                           operator=args.operator, time=args.time, batch=args.batch)
+
+
 def _ingest(args: argparse.Namespace) -> int:
-    from probegen.evaluate.ingest import ingest
+    from probegen.evaluate.ingest import identified, ingest
     from probegen.evaluate.outputs import to_table, write_outputs
     from probegen.machine.calibration import calibration_toml, check_date, load_calibration
     from probegen.spec.model import load_spec
@@ -54,6 +78,7 @@ def _ingest(args: argparse.Namespace) -> int:
         result = ingest(args.log, spec, calibration=cal, with_path=True,
                         decision_rule=args.decision_rule, run=args.run,
                         ignore_identity=args.ignore_identity)
+    result = identified(result, spec, identity_options(args))
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
     for note in result.notes:
@@ -74,7 +99,22 @@ def _ingest(args: argparse.Namespace) -> int:
                             "the probe calibration")
         print(f"wrote the probe calibration {target} ({written.fingerprint}"
               f"{'' if date else ', undated: give --calibration-date'})")
+    if args.store:
+        store_run(result, args.store)
     return verdict_code(result.status)
+
+
+def store_run(result: Ingested, url: str) -> None:
+    """Record an identified run in the store at ``url`` and say so (``docs/store.md``)."""
+    from probegen.store import open_store
+
+    assert result.run is not None, "identified() first"
+    store = open_store(url)
+    try:
+        key, new = store.add_run(result, result.run)
+    finally:
+        store.close()
+    print(f"stored run {key} in {store.url}" if new else f"run {key} already in {store.url}")
 
 
 def verdict_code(status: str) -> ExitCode:
@@ -151,7 +191,7 @@ def _qif(args: argparse.Namespace) -> int:
         export = dmis_output_to_qif(out, tolerances=limits)
         text, notes = export.text, export.notes
     else:
-        from probegen.evaluate.ingest import ingest
+        from probegen.evaluate.ingest import identified, ingest
         from probegen.machine.calibration import load_calibration
         from probegen.spec.model import load_spec
 
@@ -161,6 +201,7 @@ def _qif(args: argparse.Namespace) -> int:
         cal = load_calibration(args.calibration) if args.calibration else None
         ingested = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
                           run=args.run, ignore_identity=args.ignore_identity)
+        ingested = identified(ingested, spec, identity_options(args))
         text, notes = ingested_to_qif(ingested, spec=spec), ingested.notes
         print(f"probe: {ingested.calibration_text}")
     path = write_qif(args.output, text, schema=args.schema, validate=args.validate)

@@ -43,6 +43,12 @@ from probegen.evaluate.freeform import (
 )
 from probegen.evaluate.planar import PlanarResult, evaluate_planar
 from probegen.evaluate.revolved import MIN_SECTIONS, Nominal, RevolvedResult, evaluate_revolved
+from probegen.evaluate.run_identity import (
+    IdentityOptions,
+    RunIdentity,
+    program_label,
+    run_identity,
+)
 from probegen.evaluate.sphere_test import SphereTestResult, evaluate_sphere_test
 from probegen.geometry.fits_solver import vec3
 from probegen.geometry.uncertainty import Budget, few_dof_note
@@ -90,6 +96,8 @@ class Ingested:
         budget: the stated uncertainty contributions the characteristics' ``u`` used.
         calibration: the probe calibration the results were compensated with, or None
             (the nominal ball radius).
+        run: the run's identity (part number, serial, time ...; :func:`identified`),
+            None until it is gathered.
     """
 
     source: str
@@ -105,6 +113,7 @@ class Ingested:
     rule: str = "simple"
     budget: Budget = Budget()
     calibration: ProbeCalibration | None = None
+    run: RunIdentity | None = None
 
     @property
     def evaluated(self) -> tuple[Evaluated, ...]:
@@ -144,6 +153,27 @@ class Ingested:
     def calibration_text(self) -> str:
         """What every output says about the calibration used."""
         return str(calibration_state(self.calibration)["state"])
+
+
+def identified(ing: Ingested, spec: Spec,
+               options: IdentityOptions | None = None) -> Ingested:
+    """``ing`` with its run identity (:mod:`probegen.evaluate.run_identity`): the
+    options, the log's ``PGSERIAL`` and ``PGSTART`` (program number and identity token of
+    the run read), the spec's ``[part]``, the profile's name, the log file's time.
+
+    Raises:
+        ProbegenError: a bad option (``--time`` not ISO 8601 with an offset ...).
+    """
+    last = ing.log.runs[-1] if ing.log.runs else None
+    number = last.program if last is not None and last.program is not None else (
+        ing.log.program or spec.program_number)
+    identity = run_identity(
+        source=ing.source, options=options or IdentityOptions(),
+        part_number=spec.part_number, part_name=spec.part_name, machine=spec.machine.name,
+        program=program_label(number, None if last is None else last.identity),
+        log_serial=ing.log.serial,
+        calibration=None if ing.calibration is None else ing.calibration.fingerprint)
+    return dataclasses.replace(ing, run=identity)
 
 
 def calibration_notes(log: DprntLog, calibration: ProbeCalibration | None) -> list[str]:

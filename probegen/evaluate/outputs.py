@@ -43,8 +43,10 @@ def to_json(ing: Ingested) -> str:
     EVALUATED``, ``-`` (:mod:`probegen.evaluate.characteristics`); ``ok`` is kept beside
     it (None for what is not toleranced or not evaluated).  The completely evaluated features come
     first, then the NOT EVALUATED ones with their ``reason``."""
-    doc: dict[str, Any] = {
-        "source": ing.source,
+    doc: dict[str, Any] = {"source": ing.source}
+    if ing.run is not None:  # who, what, when (docs/results.md, "The run")
+        doc["run"] = ing.run.to_json()
+    doc |= {
         "program": ing.log.program,
         "complete": ing.log.complete,
         "status": ing.status,

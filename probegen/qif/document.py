@@ -22,10 +22,11 @@ import uuid
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from datetime import datetime
+from datetime import UTC, datetime
 from urllib.parse import quote
 
 from probegen.errors import ProbegenError
+from probegen.evaluate.run_identity import RunIdentity
 
 NAMESPACE = "http://qifstandards.org/xsd/qif3"
 """The QIF 3 target namespace (the default namespace of every document written)."""
@@ -122,6 +123,8 @@ class QifBuilder:
         statuses: every verdict (PASS/FAIL/UNDEFINED/NOT_ANALYZED) behind
             ``InspectionStatus``.
         notes: written as ``MeasurementResults/Attributes`` (``AttributeStr`` "note k").
+        run: the run's identity (:meth:`identify`), or None.
+        component_id: id of the ``ActualComponent`` (the part measured), 0 without ``run``.
     """
 
     application: str
@@ -136,6 +139,13 @@ class QifBuilder:
     singles: dict[str, ET.Element] = field(default_factory=dict)
     statuses: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    run: RunIdentity | None = None
+    component_id: int = 0
+
+    def identify(self, run: RunIdentity | None) -> None:
+        """Write the run's identity (:func:`_traceability`); nothing when None."""
+        if run is not None:
+            self.run, self.component_id = run, self.new_id()
 
     def new_id(self) -> int:
         """Return the next free QIF id."""
@@ -251,10 +261,14 @@ def _results(b: QifBuilder) -> ET.Element:
     results = ET.Element("Results")
     results_set = sub(results, "MeasurementResultsSet", n="1")
     measured = sub(results_set, "MeasurementResults", id=str(b.results_id))
-    if b.notes:
-        group = sub(measured, "Attributes", n=str(len(b.notes)))
-        for k, note in enumerate(b.notes, start=1):
-            sub(group, "AttributeStr", name=f"note {k}", value=note)
+    labels = _run_labels(b.run) + [(f"note {k}", note)
+                                   for k, note in enumerate(b.notes, start=1)]
+    if labels:
+        group = sub(measured, "Attributes", n=str(len(labels)))
+        for name, value in labels:
+            sub(group, "AttributeStr", name=name, value=value)
+    if b.run is not None:
+        measured.append(_traceability(b.run))
     if "ExternalFileReferences" in b.singles:
         measured.append(b.singles["ExternalFileReferences"])
     measured.extend(_wrapped(b, "MeasuredFeatures", "MeasuredFeatures"))
@@ -264,7 +278,49 @@ def _results(b: QifBuilder) -> ET.Element:
         chars.extend(_wrapped(b, "CharacteristicMeasurements", "CharacteristicMeasurements"))
     status = sub(measured, "InspectionStatus")
     sub(status, "InspectionStatusEnum", inspection_status(b.statuses))
+    if b.run is not None:
+        ref_list(measured, "ActualComponentIds", [b.component_id])
+        results.append(_component(b, b.run))
     return results
+
+
+def _run_labels(run: RunIdentity | None) -> list[tuple[str, str]]:
+    """``MeasurementResults/Attributes`` of the run: the program (number and identity
+    token as the log printed them) and the machine, which QIF has no element for."""
+    if run is None:
+        return []
+    return [(name, value) for name, value in (("program", run.program),
+                                              ("machine", run.machine)) if value]
+
+
+def _utc(time: str) -> str:
+    """An ISO 8601 time as QIF's ``xs:dateTime`` in UTC (QIF asks for GMT, not local)."""
+    return datetime.fromisoformat(time).astimezone(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _traceability(run: RunIdentity) -> ET.Element:
+    """``MeasurementResults/InspectionTraceability``: when, and who measured."""
+    trace = ET.Element("InspectionTraceability")
+    sub(trace, "InspectionStart", _utc(run.time))
+    if run.operator:
+        sub(sub(trace, "InspectionOperator"), "Name", run.operator)
+    return trace
+
+
+def _component(b: QifBuilder, run: RunIdentity) -> ET.Element:
+    """``Results/ActualComponentSets``: the part measured, its serial number and batch
+    (``LotNumber``) and the inspection's status."""
+    sets = ET.Element("ActualComponentSets", n="1")
+    component = sub(sub(sets, "ActualComponentSet", n="1"), "ActualComponent",
+                    id=str(b.component_id))
+    if run.serial:
+        sub(component, "SerialNumber", run.serial)
+    sub(sub(component, "Status"), "InspectionStatusEnum", inspection_status(b.statuses))
+    trace = sub(component, "Traceability")
+    if run.batch:
+        sub(trace, "LotNumber", run.batch)
+    sub(trace, "InspectionStart", _utc(run.time))
+    return sets
 
 
 def inspection_status(statuses: Sequence[str]) -> str:

@@ -42,6 +42,7 @@ from probegen.qif.document import (
 if TYPE_CHECKING:
     from probegen.evaluate.characteristics import Characteristic
     from probegen.evaluate.ingest import Ingested
+    from probegen.evaluate.run_identity import RunIdentity
     from probegen.evaluate.sphere_test import SphereTestResult
     from probegen.spec.model import Spec
 
@@ -77,8 +78,9 @@ def sphere_results_qif(ing: Ingested, *, spec: Spec | None, application: str, ve
     b.notes += [*ing.notes, *ing.uncertainty_notes,
                 f"uncertainty: combinedUncertainty is the standard uncertainty u; the "
                 f"expanded U = 2u; decision rule {ing.rule} (ISO 14253-1)"]
+    b.identify(ing.run)
     resources = _resources(b, ing, spec)
-    part = _part(b, spec)
+    part = _part(b, spec, ing.run)
     nominals: list[int] = []
     characteristic_nominals: list[int] = []
     for result, evaluated in _spheres(ing):
@@ -147,12 +149,18 @@ def _tip(probe: ET.Element, ball: float, shank: float | None) -> None:
         sub(probe, "StemDiameter", num(shank))
 
 
-def _part(b: QifBuilder, spec: Spec | None) -> ET.Element:
-    """``Product/PartSet`` with the one part (named after the spec's model file)."""
+def _part(b: QifBuilder, spec: Spec | None, run: RunIdentity | None) -> ET.Element:
+    """``Product/PartSet`` with the one part: its name (``Header/Name``), and as
+    ``ModelNumber`` its part
+    number (``[part] number``, ``--part-number``), else the spec's model file."""
     product = ET.Element("Product")
     part_set = sub(product, "PartSet", n="1")
     part = sub(part_set, "Part", id=str(b.new_id()))
-    if spec is not None and spec.model is not None:
+    if run is not None and run.part_name:
+        sub(sub(part, "Header"), "Name", run.part_name)
+    if run is not None and run.part_number:
+        sub(part, "ModelNumber", run.part_number)
+    elif spec is not None and spec.model is not None:
         sub(part, "ModelNumber", Path(spec.model).name)
     b.single("Product", product)
     return part

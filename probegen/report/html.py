@@ -22,7 +22,7 @@ from probegen.errors import ProbegenError
 from probegen.evaluate.characteristics import NOT_EVALUATED, NOT_OK, OK, UNTOLERANCED
 from probegen.files import write_file
 from probegen.report import sections
-from probegen.report.model import Characteristic, Results, read_results
+from probegen.report.model import Characteristic, Results, read_results, run_fields
 from probegen.report.numbers import fixed, signed
 from probegen.report.trend import trend_section
 from probegen.resources import template_text
@@ -42,7 +42,9 @@ def render_report(results: Mapping[str, Any], *, title: str | None = None,
 
     Args:
         results: the JSON document ``probegen ingest`` writes.
-        title: page title; default ``probegen report: <log file>``.
+        title: page title; default: the part number, name and serial when the results
+            name a part number (``Inspection report 4711-020-A Bearing block, serial
+            S0042``), else ``probegen report: <log file>``.
         generated: a text for the footer (e.g. a timestamp); none by default, so the
             page is byte-for-byte repeatable.
         source: name of the results for error messages.
@@ -59,7 +61,7 @@ def render_report(results: Mapping[str, Any], *, title: str | None = None,
     res = read_results(results, source)
     page = _env().get_template("report.html.j2").render(
         title=title or _default_title(res), results=res, status=overall_status(res),
-        views=sections.views(res),
+        run=run_fields(res.run), views=sections.views(res),
         form={f.id: sections.form_plots(f) for f in res.features},
         calibration=sections.calibration(res), decisions=sections.decisions(res),
         generated=generated, history=trend_section(history) if history else "")
@@ -100,6 +102,11 @@ def overall_status(res: Results) -> str:
 
 
 def _default_title(res: Results) -> str:
+    run = res.run
+    if run is not None and run.part_number:
+        name = f" {run.part_name}" if run.part_name else ""
+        serial = f", serial {run.serial}" if run.serial else ""
+        return f"Inspection report {run.part_number}{name}{serial}"
     return f"probegen report: {res.source}" if res.source else "probegen report"
 
 

@@ -35,6 +35,7 @@ from probegen.evaluate.characteristics import (
     run_status,
     status_of,
 )
+from probegen.evaluate.run_identity import RunIdentity
 
 Vec3 = tuple[float, float, float]
 
@@ -191,6 +192,21 @@ class Results:
     decision_rule: str = ""
     uncertainty_notes: tuple[str, ...] = ()
     calibration: str = ""
+    run: RunIdentity | None = None
+
+
+RUN_FIELDS = (("time", "date"), ("part_number", "part number"), ("part_name", "part"),
+              ("serial", "serial"), ("batch", "batch"), ("operator", "operator"),
+              ("machine", "machine"), ("program", "program"))
+"""The run's fields the report's header shows, in order, with their labels."""
+
+
+def run_fields(run: RunIdentity | None) -> list[tuple[str, str]]:
+    """(label, value) of each field of the run that is known, for the header."""
+    if run is None:
+        return []
+    return [(label, str(getattr(run, key))) for key, label in RUN_FIELDS
+            if getattr(run, key)]
 
 
 def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Results:
@@ -230,7 +246,17 @@ def read_results(doc: Mapping[str, Any], source: str = "results.json") -> Result
         decision_rule=r.text(unc.get("decision_rule", ""), "uncertainty.decision_rule"),
         uncertainty_notes=tuple(r.texts(unc.get("notes", []), "uncertainty.notes")),
         calibration=r.text(cal.get("state", ""), "calibration.state"),
+        run=None if root.get("run") is None else _run(r, root["run"]),
     )
+
+
+def _run(r: _Reader, value: object) -> RunIdentity:
+    """The ``run`` block (texts or null)."""
+    block = r.mapping(value, "run")
+    for key, item in block.items():
+        if item is not None:
+            r.text(item, f"run.{key}")
+    return RunIdentity.from_json(dict(block))
 
 
 def _run_status(features: Sequence[Feature], complete: bool | None) -> str:

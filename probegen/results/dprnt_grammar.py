@@ -22,11 +22,13 @@ from probegen.results.dprnt_records import (
     MAX_FEATURE_ID,
     MAX_INDEX_DIGITS,
     MAX_PROGRAM_DIGITS,
+    MAX_SERIAL,
     CalibrationMark,
     Centre,
     ErrorCode,
     ProgramError,
     Result,
+    SerialMark,
     Touch,
     _Builder,
     _End,
@@ -37,7 +39,8 @@ from probegen.results.dprnt_records import (
 _UPPER = {c: c - 32 for c in range(ord("a"), ord("z") + 1)}
 """ASCII-only upper-casing: ``str.upper`` would turn 'ſ' into 'S'."""
 
-_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "LOC", "CTR", "PT", "RES", "ERR", "PGEND"})
+_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "PGSERIAL", "LOC", "CTR", "PT", "RES", "ERR",
+                              "PGEND"})
 """The keywords that start a record."""
 
 _NAMES = {
@@ -53,6 +56,7 @@ _NAMES = {
     "IDENTITY": "a program identity (H and 8 hex digits)",
     "ERRCODE": "an error code (NOTOUCH, COLLISION, OUTTOL, BIGCORR or BADFIT)",
     "KEY": "a result name (letters)",
+    "SERIAL": "a serial number (letters, digits, . _ / -)",
     "_PCT": "'%'",
     "$END": "end of line",
 }
@@ -82,6 +86,16 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
 
     def cal(self, c: list[Token]) -> CalibrationMark:
         return CalibrationMark(str(c[1]), 0)
+
+    def serial(self, c: list[Token]) -> SerialMark:
+        text = str(c[1])
+        if len(text) > MAX_SERIAL:
+            raise _FieldError(c[1].column or 0, f"expected a serial number of at most "
+                              f"{MAX_SERIAL} characters, found '{text[:40]}' "
+                              f"({len(text)} characters)")
+        if text.endswith(".") and text[:-1].isdigit():
+            text = text[:-1]  # DPRNT's "4711." for a variable with no fraction digits
+        return SerialMark(text, 0)
 
     def end(self, c: list[Token]) -> _End:
         return _End(_program(c[1]))
@@ -191,7 +205,7 @@ def _expected_at(clean: str, column: int) -> set[str]:
 def _expected_names(names: set[str]) -> str:
     """Return readable text for a set of terminal names."""
     if _RECORD_KEYWORDS <= names:
-        return "a record (PGSTART, PGCAL, LOC, CTR, PT, RES, ERR or PGEND)"
+        return "a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND)"
     if "UNUMBER" in names:
         names = names - {"SIGN"}
     if "$END" in names:

@@ -108,6 +108,27 @@ class CalibrationMark:
     run: int = 0
 
 
+MAX_SERIAL = 32
+"""Longest serial number a ``PGSERIAL`` line may print."""
+
+
+@dataclass(frozen=True, slots=True)
+class SerialMark:
+    """A ``PGSERIAL`` record: the part's serial number, printed by a line the shop adds
+    to the program (``docs/dprnt-format.md``).
+
+    Attributes:
+        serial: as printed, upper case; a number's trailing point dropped (``4711.`` is
+            ``4711``, as DPRNT prints a variable with no fraction digits on some controls).
+        line: 1-based line number in the log.
+        run: the program run it belongs to (see :attr:`Touch.run`).
+    """
+
+    serial: str
+    line: int
+    run: int = 0
+
+
 ErrorCode = Literal["NOTOUCH", "COLLISION", "OUTTOL", "BIGCORR", "BADFIT"]
 """``ERR`` codes: no skip signal, signal on a guarded move, a feature out of tolerance,
 a tool correction beyond its maximum, touches that fit no circle."""
@@ -174,6 +195,7 @@ class DprntLog:
         results: ``RES`` records in log order.
         runs: one per run, in log order (see :class:`Run`).
         calibrations: ``PGCAL`` records in log order.
+        serials: ``PGSERIAL`` records in log order.
     """
 
     source: str
@@ -187,6 +209,16 @@ class DprntLog:
     results: tuple[Result, ...] = ()
     runs: tuple[Run, ...] = ()
     calibrations: tuple[CalibrationMark, ...] = ()
+    serials: tuple[SerialMark, ...] = ()
+
+    @property
+    def serial(self) -> str | None:
+        """The serial number the log printed (``PGSERIAL``): the last one read in its
+        runs (after :func:`~probegen.results.logcheck.select_runs`, the runs read: a
+        resumed run whose serial was printed before the cut counts), or None."""
+        numbers = {r.number for r in self.runs}
+        marks = [s.serial for s in self.serials if s.run in numbers or not numbers]
+        return marks[-1] if marks else None
 
     def latest_touches(self) -> tuple[Touch, ...]:
         """Return one touch per (kind, feature, index), the last one read, in line order.
@@ -219,7 +251,8 @@ class _End:
     program: int
 
 
-_Record = Touch | Centre | ProgramError | Result | CalibrationMark | _Header | _End
+_Record = (Touch | Centre | ProgramError | Result | CalibrationMark | SerialMark | _Header
+           | _End)
 
 
 class _Builder:
@@ -239,6 +272,7 @@ class _Builder:
         self.errors: list[ProgramError] = []
         self.results: list[Result] = []
         self.calibrations: list[CalibrationMark] = []
+        self.serials: list[SerialMark] = []
         self.diagnostics: list[Diagnostic] = []
         self.starts: dict[int, _Header] = {}
         self.start_lines: dict[int, int] = {}
@@ -272,6 +306,8 @@ class _Builder:
             self.results.append(rec)
         elif isinstance(rec, CalibrationMark):
             self.calibrations.append(rec)
+        elif isinstance(rec, SerialMark):
+            self.serials.append(rec)
         else:
             self.errors.append(rec)
 
@@ -340,6 +376,7 @@ class _Builder:
             results=tuple(self.results),
             runs=tuple(self._run(k) for k in range(self.run + 1)),
             calibrations=tuple(self.calibrations),
+            serials=tuple(self.serials),
         )
 
     def _run(self, k: int) -> Run:

@@ -146,6 +146,7 @@ def select_runs(log: DprntLog, run: int | None = None) -> tuple[DprntLog, list[s
         centres=tuple(c for c in log.centres if c.run in numbers),
         errors=tuple(e for e in log.errors if e.run in numbers),
         results=tuple(r for r in log.results if r.run in numbers),
+        serials=tuple(s for s in log.serials if s.run in numbers),
         complete=runs[last].complete, restarts=len(chain) - 1, runs=chain)
     return chosen, notes
 

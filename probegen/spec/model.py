@@ -5,6 +5,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     [part]
     model = "sphere25.step"        # relative to this file; optional when features give
     units = "mm"                   # their geometry explicitly ("mm" | "inch")
+    number = "4711-020-A"          # optional: the part number (results, QIF, report, store)
+    name = "Bearing block"         # optional: the part's name
 
     [machine]
     profile = "../machines/vmc-fanuc.toml"   # relative to this file
@@ -281,6 +283,8 @@ class Spec:
         features: what to measure, in the order given.
         decision_rule: ISO 14253-1 decision rule of the results (``[evaluation]
             decision_rule``): ``simple`` acceptance or ``guard_band``.
+        part_number: the part number (``[part] number``), or None.
+        part_name: the part's name (``[part] name``), or None.
     """
 
     source: str
@@ -292,6 +296,8 @@ class Spec:
     program_name: str
     features: tuple[Feature, ...]
     decision_rule: str = "simple"
+    part_number: str | None = None
+    part_name: str | None = None
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -303,6 +309,7 @@ def load_spec(path: str | Path) -> Spec:
     units = part.get_str("units", "mm", choices=("mm", "inch")) or "mm"
     k = MM_PER_INCH if units == "inch" else 1.0
     model_name = part.get_str("model")
+    number, name = _label(part, "number", 40), _label(part, "name", 80)
     part.done()
     m = root.table("machine", required=True)
     machine = _machine(m, base)
@@ -318,11 +325,25 @@ def load_spec(path: str | Path) -> Spec:
         program_name=_program_name(prog),
         features=_features(root, k, evaluation[1]),
         decision_rule=evaluation[0],
+        part_number=number,
+        part_name=name,
     )
     m.done()
     prog.done()
     root.done()
     return spec
+
+
+def _label(t: Table, key: str, longest: int) -> str | None:
+    """An optional one-line label (``[part] number``, ``name``): 1 to ``longest``
+    printable characters, blanks at either end removed."""
+    value = t.get_str(key)
+    if value is None:
+        return None
+    text = value.strip()
+    if not 1 <= len(text) <= longest or not text.isprintable():
+        raise t.fail(key, f"1-{longest} printable characters on one line")
+    return text
 
 
 def _evaluation(t: Table) -> tuple[str, str]:
