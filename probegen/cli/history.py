@@ -100,5 +100,5 @@ def _export(args: argparse.Namespace) -> int:
     else:
         out = write_file(args.output, to_csv(series), "the CSV export")
     runs = len({v.run for s in series for v in s.values})
-    print(f"wrote {out} ({len(series)} characteristics, {runs} runs)")
+    print(f"wrote {out} ({len(series)} characteristics, {runs} run{'' if runs == 1 else 's'})")
     return ExitCode.OK

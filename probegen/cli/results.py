@@ -222,8 +222,9 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def report_history(results_path: str, url: str) -> list[Series]:
-    """The stored series of the part the results belong to (its part number in the
-    results' ``run`` block), or of every part when the results name none."""
+    """The stored series of the part the results belong to (the part its ``run`` block
+    is filed under in the store: its part number, else its program number), or of every
+    part when the results have no ``run`` block."""
     import json
 
     from probegen.cli.history import store_series
@@ -232,6 +233,9 @@ def report_history(results_path: str, url: str) -> list[Series]:
         doc = json.loads(read_input(results_path, "results.json"))
     except (ProbegenError, json.JSONDecodeError):
         return []  # the report itself names what is wrong with the results
+    from probegen.evaluate.run_identity import RunIdentity
+    from probegen.store.records import part_of
+
     run = doc.get("run") if isinstance(doc, dict) else None
-    part = run.get("part_number") if isinstance(run, dict) else None
-    return store_series(url, part=part if isinstance(part, str) and part else None)
+    part = part_of(RunIdentity.from_json(run)) if isinstance(run, dict) else None
+    return store_series(url, part=part)
