@@ -138,6 +138,9 @@ def _post(args: argparse.Namespace) -> int:
     for s in posted.skipped:
         print(f"probegen: skipped {args.program}:{s.line}: {s.text} ({s.reason})",
               file=sys.stderr)
+    for s in posted.notes:
+        print(f"probegen: note {args.program}:{s.line}: {s.text} ({s.reason})",
+              file=sys.stderr)
     print(f"wrote {target} and {map_path}: {len(posted.touches)} touches")
     if posted.rerouted:
         print(f"  rerouted over the clearance plane: lines "

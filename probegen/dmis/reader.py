@@ -331,6 +331,22 @@ def read_dmis(path: str | Path) -> DmisFile:
     return parse_dmis(read_dmis_text(path), source=str(path))
 
 
+def read_dmis_all(path: str | Path) -> DmisFile:
+    """Read and parse a DMIS file like :func:`read_dmis`, but report every statement that
+    does not parse, not only the first (each with line, column and the statement).
+
+    Raises:
+        ProgramParseError: as :func:`read_dmis`; its diagnostics list every bad statement.
+    """
+    source = str(path)
+    parsed, diagnostics = parse_dmis_recovering(read_dmis_text(path), source=source)
+    if diagnostics:
+        head = (f"{source}: 1 statement does not parse:" if len(diagnostics) == 1 else
+                f"{source}: {len(diagnostics)} statements do not parse:")
+        raise ProgramParseError("\n".join([head, *map(str, diagnostics)]), diagnostics)
+    return parsed
+
+
 def read_dmis_text(path: str | Path) -> str:
     """Return the text of a DMIS file as every command reads it: UTF-8 (a BOM dropped),
     or Latin-1 when the bytes are not UTF-8.
