@@ -77,7 +77,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     kin = load_machine(args.errors) if args.errors else None
     from probegen.cli.progress import Bar
 
-    text = read_input(args.program, "the program to run (Macro B or DMIS)", encoding="ascii")
+    text = _program_text(args.program)
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
@@ -118,6 +118,20 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     if not (args.part and args.machine):
         raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
     return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
+
+
+def _program_text(path: str) -> str:
+    """The text of a program to run: a DMIS file as every command reads it (UTF-8 with or
+    without BOM, else Latin-1), a Macro B program as ASCII."""
+    from probegen.sim.vm import program_kind
+
+    if program_kind(path) == "dmis":
+        from probegen.dmis.reader import read_dmis_text
+        from probegen.files import note_input
+
+        note_input(Path(path))
+        return read_dmis_text(path)
+    return read_input(path, "the program to run (Macro B or DMIS)", encoding="ascii")
 
 
 def _post(args: argparse.Namespace) -> int:

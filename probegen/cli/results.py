@@ -139,7 +139,11 @@ def _qif(args: argparse.Namespace) -> int:
 
         limits = None
         if args.program:
-            text = read_input(args.program, "the DMIS program")
+            from probegen.dmis.reader import read_dmis_text
+            from probegen.files import note_input
+
+            note_input(Path(args.program))
+            text = read_dmis_text(args.program)
             limits = read_dmis_tolerances(text, source=args.program)
         out = read_dmis_output(args.input, strict=args.strict)
         if not out.features and not out.tolerances:

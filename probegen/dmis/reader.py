@@ -513,8 +513,8 @@ def _continuation(line: str, mode: int) -> tuple[int, int] | None:
     if not body.endswith("$"):
         return None
     cut = len(body) - 1
-    if mode == _COMMENT:
-        return (_COMMENT, cut) if _comment_continues(body) else None
+    if mode == _COMMENT:  # a line of comment text: a "$" alone on it continues too
+        return (_COMMENT, cut) if body == "$" or _comment_continues(body) else None
     in_string = mode == _STRING
     for index, char in enumerate(body):
         if char == "'":
