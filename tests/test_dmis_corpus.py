@@ -46,6 +46,7 @@ from probegen.errors import ProgramParseError, UnsupportedError
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.machine.profile import load_profile
 from probegen.post.evaluate import evaluate_log
+from probegen.post.featuremap import read_feature_map
 from probegen.post.files import PostOutput, post_file
 from probegen.results import parse_dprnt
 from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
@@ -287,3 +288,26 @@ def test_mutated_statements_and_continuations_end_in_a_result_or_a_located_error
 @given(st.text(ALPHABET, max_size=200))
 def test_random_text_ends_in_a_result_or_a_located_error(text: str) -> None:
     located(text)
+
+
+def test_cli_post_prints_and_writes_notes_and_skipped(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``post`` prints every noted and skipped statement and writes them in the map."""
+    program = tmp_path / "lk.dmi"
+    text = read_dmis_text(CORPUS / "lk_camio.dmi").replace(
+        "MODE/PROG,MAN", "V(0)=VFORM/ALL,PLOT")
+    program.write_bytes(text.encode("latin-1"))
+    args = ["post", str(program), "--machine", str(REPO / "samples/post/vmc-fanuc-d4.toml"),
+            "--model", str(MODEL), "-o", str(tmp_path / "lk.nc")]
+    assert main(args) != 0
+    assert f"{program}:5: " in capsys.readouterr().err
+    assert main([*args, "--skip-unsupported"]) == 0
+    err = capsys.readouterr().err
+    assert f"probegen: skipped {program}:5: V(0)=VFORM/ALL,PLOT" in err
+    assert f"probegen: note {program}:10: RECALL/SA(Étoile_Zd2-Z_A90.0_B90.0) (SA(ÉTOILE_" \
+        in err
+    saved = read_feature_map(tmp_path / "lk.features.json")
+    assert [row[0] for row in saved.skipped] == [5]
+    assert [row[0] for row in saved.notes] == [10, 11]
+    assert all(row[2].endswith("mapped to the machine's calibrated stylus D4 mm")
+               for row in saved.notes)
