@@ -125,13 +125,13 @@ def _program_text(path: str) -> str:
     without BOM, else Latin-1), a Macro B program as ASCII."""
     from probegen.sim.vm import program_kind
 
+    what = "the program to run (Macro B or DMIS)"
     if program_kind(path) == "dmis":
         from probegen.dmis.reader import read_dmis_text
-        from probegen.files import note_input
 
-        note_input(Path(path))
+        read_input(path, what)  # its checks and messages (missing, a folder)
         return read_dmis_text(path)
-    return read_input(path, "the program to run (Macro B or DMIS)", encoding="ascii")
+    return read_input(path, what, encoding="ascii")
 
 
 def _post(args: argparse.Namespace) -> int:

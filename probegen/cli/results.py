@@ -140,9 +140,8 @@ def _qif(args: argparse.Namespace) -> int:
         limits = None
         if args.program:
             from probegen.dmis.reader import read_dmis_text
-            from probegen.files import note_input
 
-            note_input(Path(args.program))
+            read_input(args.program, "the DMIS program")  # its checks and messages
             text = read_dmis_text(args.program)
             limits = read_dmis_tolerances(text, source=args.program)
         out = read_dmis_output(args.input, strict=args.strict)
