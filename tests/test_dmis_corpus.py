@@ -311,3 +311,12 @@ def test_cli_post_prints_and_writes_notes_and_skipped(
     assert [row[0] for row in saved.notes] == [10, 11]
     assert all(row[2].endswith("mapped to the machine's calibrated stylus D4 mm")
                for row in saved.notes)
+
+
+def test_virtual_cmm_lists_every_bad_statement() -> None:
+    text = FLAT.read_text().replace("UNITS/MM,ANGDEC", "UNITS/MM,ANGDEC ?").replace(
+        "ENDMES", "ENDMES\n/oops")
+    with pytest.raises(ProgramParseError) as info:
+        run_dmis(text, CmmAdapter(vm()), source="two.dmi")
+    assert [(d.line, d.column) for d in info.value.diagnostics] == [(2, 17), (23, 1)]
+    assert str(info.value).startswith("two.dmi: 2 statements do not parse:\ntwo.dmi:2:17: ")

@@ -333,17 +333,27 @@ def read_dmis(path: str | Path) -> DmisFile:
 
 def read_dmis_all(path: str | Path) -> DmisFile:
     """Read and parse a DMIS file like :func:`read_dmis`, but report every statement that
-    does not parse, not only the first (each with line, column and the statement).
+    does not parse, not only the first (:func:`parse_dmis_all`).
 
     Raises:
         ProgramParseError: as :func:`read_dmis`; its diagnostics list every bad statement.
     """
-    source = str(path)
-    parsed, diagnostics = parse_dmis_recovering(read_dmis_text(path), source=source)
+    return parse_dmis_all(read_dmis_text(path), source=str(path))
+
+
+def parse_dmis_all(text: str, *, source: str = "<string>") -> DmisFile:
+    """Parse DMIS text like :func:`parse_dmis`, but read on after a bad statement and
+    report every one (line, column, what was expected and found, the line).
+
+    Raises:
+        ProgramParseError: one diagnostic per bad statement; the message lists them all.
+    """
+    parsed, diagnostics = parse_dmis_recovering(text, source=source)
     if diagnostics:
-        head = (f"{source}: 1 statement does not parse:" if len(diagnostics) == 1 else
-                f"{source}: {len(diagnostics)} statements do not parse:")
-        raise ProgramParseError("\n".join([head, *map(str, diagnostics)]), diagnostics)
+        lines = [str(d) for d in diagnostics]
+        if len(lines) > 1:
+            lines.insert(0, f"{source}: {len(lines)} statements do not parse:")
+        raise ProgramParseError("\n".join(lines), diagnostics)
     return parsed
 
 

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis
+from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis_all
 from probegen.errors import ProbegenError, UnsupportedError
 from probegen.geometry.frames import FloatArray, unit
 from probegen.sim.alarms import SimAlarm
@@ -167,12 +167,12 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
         The run result; a machine alarm is reported in it, not raised.
 
     Raises:
-        ProgramParseError: ``program`` text does not parse.
+        ProgramParseError: ``program`` text does not parse (every bad statement listed).
         UnsupportedError: a statement the VM cannot execute (``source:line`` named).
         DmisProgramError: the program is wrong (undefined label, too few points ...).
     """
-    parsed = parse_dmis(program, source=source or "<string>") if isinstance(program, str) \
-        else program
+    parsed = parse_dmis_all(program, source=source or "<string>") \
+        if isinstance(program, str) else program
     start = arr(home) if home is not None else None
     state = VmState(cmm, source or parsed.source, compensation, start)
     skipped: list[SkippedStatement] = []
