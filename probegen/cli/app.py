@@ -85,7 +85,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     kin = load_machine(args.errors) if args.errors else None
     from probegen.cli.progress import Bar
 
-    text = read_input(args.program, "the program to run (Macro B or DMIS)", encoding="ascii")
+    text = _program_text(args.program)
     probes = text.upper().count("G31") + text.upper().count("PTMEAS")
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
@@ -128,6 +128,20 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
 
 
+def _program_text(path: str) -> str:
+    """The text of a program to run: a DMIS file as every command reads it (UTF-8 with or
+    without BOM, else Latin-1), a Macro B program as ASCII."""
+    from probegen.sim.vm import program_kind
+
+    what = "the program to run (Macro B or DMIS)"
+    if program_kind(path) == "dmis":
+        from probegen.dmis.reader import read_dmis_text
+
+        read_input(path, what)  # its checks and messages (missing, a folder)
+        return read_dmis_text(path)
+    return read_input(path, what, encoding="ascii")
+
+
 def _post(args: argparse.Namespace) -> int:
     from probegen.cad import load_part
     from probegen.dialects import get_dialect
@@ -145,6 +159,9 @@ def _post(args: argparse.Namespace) -> int:
     posted = out.posted
     for s in posted.skipped:
         print(f"probegen: skipped {args.program}:{s.line}: {s.text} ({s.reason})",
+              file=sys.stderr)
+    for s in posted.notes:
+        print(f"probegen: note {args.program}:{s.line}: {s.text} ({s.reason})",
               file=sys.stderr)
     print(f"wrote {target} and {map_path}: {len(posted.touches)} touches")
     if posted.rerouted:

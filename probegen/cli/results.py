@@ -179,7 +179,10 @@ def _qif(args: argparse.Namespace) -> int:
 
         limits = None
         if args.program:
-            text = read_input(args.program, "the DMIS program")
+            from probegen.dmis.reader import read_dmis_text
+
+            read_input(args.program, "the DMIS program")  # its checks and messages
+            text = read_dmis_text(args.program)
             limits = read_dmis_tolerances(text, source=args.program)
         out = read_dmis_output(args.input, strict=args.strict)
         if not out.features and not out.tolerances:

@@ -28,6 +28,7 @@ bad statement becomes a diagnostic and the others are kept (reading DMIS output 
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 import re
@@ -169,9 +170,20 @@ class _Raw:
     end: int = 0
 
 
+@dataclass(frozen=True, slots=True)
+class _Comment:
+    """A ``$$`` comment before positions are mapped: ``start`` is its logical offset."""
+
+    start: int
+    text: str
+
+
 @v_args(inline=True)
 class _Builder(Transformer[Token, Any]):
-    """Build typed values while the LALR parser reduces; stateless, so one is shared."""
+    """Build typed values while the LALR parser reduces; stateless, so one is shared.
+
+    Positions are offsets into the logical (spliced) text; :class:`_Splice` maps them back.
+    """
 
     def start(self, *lines: list[Any]) -> list[Any]:
         return [item for line in lines for item in line]
@@ -182,19 +194,29 @@ class _Builder(Transformer[Token, Any]):
         for child in children[:-1]:
             if isinstance(child, Token):
                 end = child.start_pos
-                out.append((child.line, child.value[2:].strip()))
+                out.append(_Comment(child.start_pos or 0, child.value[2:].strip()))
         if isinstance(children[0], _Raw):
             out.insert(0, replace(children[0], end=end))
         return out
 
     def statement(self, target: Any, major: Token, _slash: Any, params: Any) -> _Raw:
         label, first = target if target else (None, major)
-        return _Raw(first.line or 1, first.start_pos or 0, label, major.upper(), params or ())
+        return _Raw(0, first.start_pos or 0, label, major.upper(), params or ())
 
     def target(self, kind: Token, name: Param) -> tuple[Label, Token]:
         """Return the label and the token where the statement starts."""
         text = name if isinstance(name, str) else format_param(name)
         return Label(kind.upper(), text), kind
+
+    def label_target(self, token: Token) -> tuple[Label, Token]:
+        kind, name = _split_label(token)
+        return Label(kind, name), token
+
+    def label(self, token: Token) -> Label | Call:
+        kind, name = _split_label(token)
+        if _FLOAT.fullmatch(name):  # F(1.5): a call with a number, as before labels had dots
+            return Call(kind, (float(name),))
+        return Label(kind, name)
 
     def indexed_name(self, name: Token, *indices: Param) -> str:
         return f"{name.upper()}[{_join(indices)}]"
@@ -244,6 +266,17 @@ class _Builder(Transformer[Token, Any]):
         return Expr(":", parts)
 
 
+_FLOAT = re.compile(r"\d*\.\d*(?:E[+-]?\d+)?|\d+E[+-]?\d+")
+_INTEGER = re.compile(r"\d+")
+
+
+def _split_label(token: Token) -> tuple[str, str]:
+    """Return (kind, name) of a ``LABELREF`` token, upper-cased, blanks removed."""
+    kind, _, rest = token.value.partition("(")
+    name = re.sub(r"[ \t]", "", rest[:-1]).upper()
+    return kind.strip().upper(), str(int(name)) if _INTEGER.fullmatch(name) else name
+
+
 def _label_name(items: tuple[Param, ...]) -> str | None:
     """Return the label name if ``items`` is one name (``C1``, ``12``, ``P[3]``), else None."""
     if len(items) != 1:
@@ -273,46 +306,70 @@ def parse_dmis(text: str, *, source: str = "<string>") -> DmisFile:
     """Parse DMIS program or output text.
 
     Args:
-        text: the whole file; CRLF, LF or CR line ends; a leading BOM is ignored.
+        text: the whole file; CRLF, LF or CR line ends; a leading BOM is ignored;
+            continued lines are joined first (:func:`splice`).
         source: the file name used in error messages.
 
     Returns:
-        The statements in order and the comments.
+        The statements in order and the comments, with physical line numbers.
 
     Raises:
-        ProgramParseError: on a syntax error; the message names ``source:line:column``,
-            what was expected and what was found, and shows the line with a caret.
+        ProgramParseError: on a syntax error; the message names ``source:line:column``
+            (physical), what was expected and what was found, and shows the line with a caret.
     """
-    text = _LONE_CR.sub("\n", text.removeprefix("\ufeff"))
-    padded = text if text.endswith("\n") else text + "\n"
-    try:
-        items = cast(list[Any], _parser().parse(padded))
-    except UnexpectedInput as exc:
-        raise _syntax_error(exc, padded, source) from None
-    raws = [item for item in items if isinstance(item, _Raw)]
-    for raw in raws:
-        if _too_deep(raw.params):
-            column = raw.start - padded.rfind("\n", 0, raw.start)
-            message = f"expected parameters nested at most {MAX_DEPTH} deep, found deeper nesting"
-            raise _error(source, raw.line, column, message, padded)
-    comments = tuple(item for item in items if isinstance(item, tuple))
-    statements = tuple(_finish(raw, text) for raw in raws)
-    return DmisFile(source=source, statements=statements, comments=comments)
+    joined = splice(text)
+    return _build(joined, _parse_range(joined, 0, len(joined.logical), source), source)
 
 
 def read_dmis(path: str | Path) -> DmisFile:
-    """Read and parse a DMIS file (UTF-8, or Latin-1 when it is not valid UTF-8).
+    """Read and parse a DMIS file (UTF-8 with or without BOM, or Latin-1 when not UTF-8).
 
     Raises:
         ProgramParseError: the file cannot be read, is binary (holds NUL bytes) or
             does not parse.
+    """
+    return parse_dmis(read_dmis_text(path), source=str(path))
+
+
+def read_dmis_all(path: str | Path) -> DmisFile:
+    """Read and parse a DMIS file like :func:`read_dmis`, but report every statement that
+    does not parse, not only the first (:func:`parse_dmis_all`).
+
+    Raises:
+        ProgramParseError: as :func:`read_dmis`; its diagnostics list every bad statement.
+    """
+    return parse_dmis_all(read_dmis_text(path), source=str(path))
+
+
+def parse_dmis_all(text: str, *, source: str = "<string>") -> DmisFile:
+    """Parse DMIS text like :func:`parse_dmis`, but read on after a bad statement and
+    report every one (line, column, what was expected and found, the line).
+
+    Raises:
+        ProgramParseError: one diagnostic per bad statement; the message lists them all.
+    """
+    parsed, diagnostics = parse_dmis_recovering(text, source=source)
+    if diagnostics:
+        lines = [str(d) for d in diagnostics]
+        if len(lines) > 1:
+            lines.insert(0, f"{source}: {len(lines)} statements do not parse:")
+        raise ProgramParseError("\n".join(lines), diagnostics)
+    return parsed
+
+
+def read_dmis_text(path: str | Path) -> str:
+    """Return the text of a DMIS file as every command reads it: UTF-8 (a BOM dropped),
+    or Latin-1 when the bytes are not UTF-8.
+
+    Raises:
+        ProgramParseError: the file cannot be read or holds NUL bytes (binary, UTF-16).
     """
     source = str(path)
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ProgramParseError(f"{source}: cannot read: {exc.strerror}") from None
-    return parse_dmis(_decode(data, source), source=source)
+    return decode_dmis(data, source)
 
 
 def parse_dmis_recovering(
@@ -321,9 +378,8 @@ def parse_dmis_recovering(
     """Parse DMIS text, keeping every statement that parses and reporting the others.
 
     A file that parses whole is returned as :func:`parse_dmis` returns it.  Otherwise
-    the text is cut into logical statements (physical lines joined by a ``$`` at the end
-    of a line; a line with a ``$$`` comment never continues, as in the grammar) and
-    each is parsed alone: a bad statement costs only itself.
+    each logical line (physical lines joined by continuations, :func:`splice`) is parsed
+    alone: a bad statement costs only itself.
 
     Args:
         text: the whole file; CRLF, LF or CR line ends; a leading BOM is ignored.
@@ -333,50 +389,190 @@ def parse_dmis_recovering(
         The good statements and comments with physical line numbers, and one
         diagnostic (line, column, expected, found, caret) per bad statement.
     """
+    joined = splice(text)
     try:
-        return parse_dmis(text, source=source), ()
+        return _build(joined, _parse_range(joined, 0, len(joined.logical), source), source), ()
     except ProgramParseError:
         pass
-    statements: list[Statement] = []
-    comments: list[tuple[int, str]] = []
+    items: list[Any] = []
     diagnostics: list[Diagnostic] = []
-    for first, chunk in logical_statements(text):
-        shift = first - 1
+    start = 0
+    logical = joined.logical
+    while start < len(logical):
+        stop = logical.find("\n", start)
+        stop = len(logical) if stop < 0 else stop + 1
         try:
-            part = parse_dmis(chunk, source=source)
+            items.extend(_parse_range(joined, start, stop, source))
         except ProgramParseError as exc:
-            diagnostics.extend(replace(d, line=d.line + shift) for d in exc.diagnostics)
-            continue
-        statements.extend(replace(s, line=s.line + shift) for s in part.statements)
-        comments.extend((line + shift, comment) for line, comment in part.comments)
-    return DmisFile(source, tuple(statements), tuple(comments)), tuple(diagnostics)
+            diagnostics.extend(exc.diagnostics)
+        start = stop
+    return _build(joined, items, source), tuple(diagnostics)
 
 
 def logical_statements(text: str) -> list[tuple[int, str]]:
     """Cut DMIS text into logical statements: ``(first physical line, text)`` pairs.
 
-    Physical lines are joined while a line ends with ``$`` (blanks after it allowed)
-    outside quotes and has no ``$$`` comment.  Every physical line belongs to exactly
-    one pair, so line numbers stay physical.
+    Physical lines are joined as :func:`splice` joins them (a continuation ``$`` at the
+    end of a line, in a statement, a string or a comment).  Every physical line belongs to
+    exactly one pair, so line numbers stay physical.
     """
-    lines = _LONE_CR.sub("\n", text.removeprefix("\ufeff")).split("\n")
+    joined = splice(text)
+    parts = _LINE_END.split(text.removeprefix("\ufeff"))
     out: list[tuple[int, str]] = []
     start = 0
-    for index, line in enumerate(lines):
-        if index + 1 < len(lines) and _continues(line):
+    count = (len(parts) + 1) // 2
+    for index in range(count):
+        if index + 1 < count and index < len(joined.continues) and joined.continues[index]:
             continue
-        out.append((start + 1, "\n".join(lines[start : index + 1])))
+        out.append((start + 1, "".join(parts[2 * start : 2 * index + 1])))
         start = index + 1
     return out
 
 
-_QUOTED = re.compile(r"'(?:[^'\r\n]|'')*'")
+_LINE_END = re.compile(r"(\r\n|\r|\n)")
 
 
-def _continues(line: str) -> bool:
-    """Return True if a physical line continues on the next (``$`` last, no comment)."""
-    code = _QUOTED.sub("''", line)
-    return "$$" not in code and code.rstrip(" \t\r").endswith("$")
+# ------------------------------------------------------------------------ continuations
+
+_CODE, _STRING, _COMMENT = 0, 1, 2
+"""What a continued line continues: a statement, a quoted string or a ``$$`` comment."""
+
+_STATEMENT_START = re.compile(
+    r"[ \t]*(?:\w+[ \t]*\([^()\n]*\)[ \t]*=|[A-Za-z]\w*[ \t]*/"
+    r"|(?:ENDMES|ENDFIL|ENDGO|ENDMAC|ENDDO|ENDIF|ELSE|ENDSEL|ENDCAS|DFTCAS|ENDAT|ENDXTN"
+    r"|ENDSIMREQT|PAUSE|RMEAS)[ \t]*(?:\$\$|$))",
+    re.IGNORECASE,
+)
+"""A physical line that starts a statement: a wrapped comment never goes on onto it."""
+
+
+@dataclass(frozen=True, slots=True)
+class Spliced:
+    """DMIS text with its continued lines joined, and the way back to physical positions.
+
+    Attributes:
+        physical: the physical lines (BOM dropped, line ends removed).
+        logical: the joined text; each logical line ends with ``\\n`` (the last one not
+            when the file ends in a continuation).
+        starts: the logical offset where each physical line's kept text begins.
+        dropped: per physical line, the leading blanks dropped (a continuation line).
+        continues: per physical line, whether it continues on the next.
+    """
+
+    physical: tuple[str, ...]
+    logical: str
+    starts: tuple[int, ...]
+    dropped: tuple[int, ...]
+    continues: tuple[bool, ...]
+
+    def position(self, offset: int) -> tuple[int, int]:
+        """Return the 1-based physical (line, column) of a logical offset."""
+        index = max(bisect.bisect_right(self.starts, offset) - 1, 0)
+        return index + 1, offset - self.starts[index] + self.dropped[index] + 1
+
+    @property
+    def text(self) -> str:
+        """The physical text, lines joined with ``\\n``."""
+        return "\n".join(self.physical)
+
+
+def splice(text: str) -> Spliced:
+    """Join continued lines the way CMM software writes them.
+
+    A ``$`` that is the last character of a line (blanks after it allowed) continues the
+    line on the next one, wherever it stands: between words, inside a word, a number, a
+    quoted string or a label (LK CAMIO wraps every line at column 80).  The ``$`` and the
+    line end are removed and the next line follows directly; its leading blanks are
+    dropped unless it goes on inside a quoted string (indented continuation lines).
+    In a ``$$`` comment a last ``$`` after other text continues the comment: the next
+    line is comment text, unless it starts a statement (``WORD/...``, ``X(name)=...``
+    or a bare ``ENDMES``-like word); a banner of ``$`` alone never continues.
+    """
+    text = text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
+    lines = text.split("\n")
+    if len(lines) > 1 and lines[-1] == "":
+        lines.pop()
+    pieces: list[str] = []
+    starts: list[int] = []
+    dropped: list[int] = []
+    continues: list[bool] = []
+    offset, mode = 0, _CODE
+    for index, line in enumerate(lines):
+        blanks = len(line) - len(line.lstrip(" \t")) if index and continues[-1] else 0
+        if mode == _STRING:
+            blanks = 0
+        starts.append(offset)
+        dropped.append(blanks)
+        found = _continuation(line, mode)
+        if found is not None and found[0] == _COMMENT and (
+            index + 1 == len(lines) or _STATEMENT_START.match(lines[index + 1])
+        ):
+            found = None
+        piece = line[blanks : max(found[1], blanks)] if found else line[blanks:] + "\n"
+        mode = found[0] if found else _CODE
+        continues.append(found is not None)
+        pieces.append(piece)
+        offset += len(piece)
+    return Spliced(tuple(lines), "".join(pieces), tuple(starts), tuple(dropped),
+                   tuple(continues))
+
+
+def _continuation(line: str, mode: int) -> tuple[int, int] | None:
+    """Return (what goes on, where the ``$`` is) if ``line``, entered in ``mode``, continues."""
+    body = line.rstrip(" \t\f")
+    if not body.endswith("$"):
+        return None
+    cut = len(body) - 1
+    if mode == _COMMENT:  # a line of comment text: a "$" alone on it continues too
+        return (_COMMENT, cut) if body == "$" or _comment_continues(body) else None
+    in_string = mode == _STRING
+    for index, char in enumerate(body):
+        if char == "'":
+            in_string = not in_string  # '' inside a string toggles twice: still inside
+        elif char == "$" and not in_string and index < cut:
+            if body[index + 1] == "$":
+                return (_COMMENT, cut) if _comment_continues(body[index + 2 :]) else None
+    return (_STRING if in_string else _CODE, cut)
+
+
+def _comment_continues(comment: str) -> bool:
+    """Return True if comment text ending in ``$`` continues (``$`` after other text)."""
+    return len(comment) >= 2 and comment[-2] != "$"
+
+
+# ------------------------------------------------------------------------------ parsing
+
+
+def _parse_range(joined: Spliced, start: int, stop: int, source: str) -> list[Any]:
+    """Parse ``joined.logical[start:stop]``; return raw statements and comments with
+    logical offsets, or raise a ProgramParseError at the physical position."""
+    chunk = joined.logical[start:stop]
+    try:
+        items = cast(list[Any], _parser().parse(chunk))
+    except UnexpectedInput as exc:
+        raise _syntax_error(exc, joined, start, source) from None
+    if start:
+        items = [replace(item, start=item.start + start, end=item.end + start)
+                 if isinstance(item, _Raw) else replace(item, start=item.start + start)
+                 for item in items]
+    for raw in items:
+        if isinstance(raw, _Raw) and _too_deep(raw.params):
+            line, column = joined.position(raw.start)
+            message = f"expected parameters nested at most {MAX_DEPTH} deep, found deeper nesting"
+            raise _error(source, line, column, message, joined.physical)
+    return items
+
+
+def _build(joined: Spliced, items: list[Any], source: str) -> DmisFile:
+    """Return the DmisFile of parsed items, positions mapped back to physical lines."""
+    statements = tuple(
+        Statement(joined.position(item.start)[0], item.label, item.major, item.params,
+                  joined.logical[item.start : item.end].rstrip())
+        for item in items if isinstance(item, _Raw)
+    )
+    comments = tuple((joined.position(item.start)[0], item.text)
+                     for item in items if isinstance(item, _Comment))
+    return DmisFile(source=source, statements=statements, comments=comments)
 
 
 MAX_DEPTH = 100
@@ -398,36 +594,26 @@ def _too_deep(params: tuple[Param, ...]) -> bool:
     return False
 
 
-def _error(source: str, line: int, column: int, message: str, text: str) -> ProgramParseError:
+def _error(source: str, line: int, column: int, message: str,
+           lines: tuple[str, ...] | list[str]) -> ProgramParseError:
     """Return the error for ``message`` at a 1-based position, showing physical line ``line``."""
-    lines = text.split("\n")
     physical = lines[line - 1].rstrip("\r") if 0 < line <= len(lines) else ""
     diag = Diagnostic(source, line, column, message, physical)
     return ProgramParseError(str(diag), (diag,))
 
 
-_LONE_CR = re.compile(r"\r(?!\n)")
-_CONTINUATION = re.compile(r"('(?:[^'\r\n]|'')*')|\$[ \t]*\r?\n[ \t]*")
-
-
-def _decode(data: bytes, source: str) -> str:
+def decode_dmis(data: bytes, source: str) -> str:
     """Decode file bytes, refusing binary data with a located error."""
     nul = data.find(b"\x00")
     if nul >= 0:
         line = data.count(b"\n", 0, nul) + 1
         column = nul - (data.rfind(b"\n", 0, nul) + 1) + 1
         message = "not a DMIS text file: found a NUL byte (binary or UTF-16 data?)"
-        raise _error(source, line, column, message, "")
+        raise _error(source, line, column, message, ())
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError:
         return data.decode("latin-1")
-
-
-def _finish(raw: _Raw, text: str) -> Statement:
-    """Cut the statement text from the source, joining ``$`` continuation lines."""
-    written = _CONTINUATION.sub(lambda m: m.group(1) or "", text[raw.start : raw.end])
-    return Statement(raw.line, raw.label, raw.major, raw.params, written.rstrip())
 
 
 _READABLE = {
@@ -454,19 +640,25 @@ _OPERATORS = frozenset({"SIGN", "STAR", "SLASH", "POW", "RELOP", "AND", "OR", "_
 _OPERATORS_AFTER_OPERAND = _OPERATORS | {"_EQUAL", "_LSQB"}
 
 
-def _syntax_error(exc: UnexpectedInput, text: str, source: str) -> ProgramParseError:
-    """Translate a lark error into a ProgramParseError at the physical line and column."""
-    line, column = exc.line, exc.column
+def _syntax_error(exc: UnexpectedInput, joined: Spliced, start: int,
+                  source: str) -> ProgramParseError:
+    """Translate a lark error on ``joined.logical[start:]`` into a ProgramParseError at the
+    physical line and column."""
+    text = joined.logical
     if isinstance(exc, UnexpectedToken):
         expected, found = set(exc.accepts or exc.expected), _describe(exc.token)
-        if exc.token.type == "$END":
-            line, column = _end_position(text)
+        at_end = exc.token.type == "$END"
+        offset = start + (exc.token.start_pos or 0)
     elif isinstance(exc, UnexpectedCharacters):
-        expected, found = _allowed(exc), _describe_char(text[exc.pos_in_stream or 0])
+        offset = start + (exc.pos_in_stream or 0)
+        expected, found = _allowed(exc), _describe_char(text[offset])
+        at_end = False
     else:  # UnexpectedEOF: not raised by the LALR parser, kept for safety
         expected, found = set(getattr(exc, "expected", ())), "end of file"
-        line, column = _end_position(text)
-    return _error(source, line, column, f"expected {_expected_list(expected)}, found {found}", text)
+        at_end, offset = True, 0
+    line, column = _end_position(joined.physical) if at_end else joined.position(offset)
+    message = f"expected {_expected_list(expected)}, found {found}"
+    return _error(source, line, column, message, joined.physical)
 
 
 def _allowed(exc: UnexpectedCharacters) -> set[str]:
@@ -477,6 +669,7 @@ def _allowed(exc: UnexpectedCharacters) -> set[str]:
 
 def _expected_list(terminals: set[str]) -> str:
     """Return ``"a, b or c"`` for the expected terminals; operators become one entry."""
+    terminals = terminals - {"LABELREF"}  # accepted only where a word is: "a word" says it
     if "STAR" in terminals:  # after an operand: any binary operator may follow
         terminals = (terminals - _OPERATORS_AFTER_OPERAND) | {"OPERATOR"}
     return readable_list(terminals, _READABLE)
@@ -503,7 +696,9 @@ def _describe_char(char: str) -> str:
     return _CHAR_HINTS.get(char, repr(char))
 
 
-def _end_position(text: str) -> tuple[int, int]:
-    """Return the 1-based (line, column) just after the last character of ``text``."""
-    body = text.rstrip("\r\n")
-    return body.count("\n") + 1, len(body) - (body.rfind("\n") + 1) + 1
+def _end_position(lines: tuple[str, ...]) -> tuple[int, int]:
+    """Return the 1-based (line, column) just after the last character of the text."""
+    count = len(lines)
+    while count > 1 and not lines[count - 1]:
+        count -= 1
+    return count, len(lines[count - 1]) + 1 if lines else 1

@@ -27,6 +27,7 @@ from typing import Any
 from probegen.dmis.reader import logical_statements
 from probegen.errors import ResultsParseError
 from probegen.post.posted import PostedProgram, PostTouch
+from probegen.sim.cmm.interpreter import SkippedStatement
 
 FORMAT = "probegen-post-features"
 VERSION = 1
@@ -44,6 +45,8 @@ class FeatureMap:
     units: str
     ball_diameter: float
     touches: tuple[PostTouch, ...]
+    skipped: tuple[tuple[int, str, str], ...] = ()
+    notes: tuple[tuple[int, str, str], ...] = ()
 
 
 def as_posted(text: str, dropped: tuple[int, ...]) -> str:
@@ -70,7 +73,12 @@ def feature_map(posted: PostedProgram, data: str | bytes, source: str,
     return FeatureMap(Path(source).name, hashlib.sha256(raw).hexdigest(),
                       as_posted(text, posted.dropped_lines), dialect,
                       setup.program_number, setup.units, setup.ball_diameter,
-                      posted.touches)
+                      posted.touches, _rows(posted.skipped), _rows(posted.notes))
+
+
+def _rows(items: tuple[SkippedStatement, ...]) -> tuple[tuple[int, str, str], ...]:
+    """(line, statement, reason) rows of skipped or noted statements."""
+    return tuple((s.line, s.text, s.reason) for s in items)
 
 
 def dumps(fmap: FeatureMap) -> str:
@@ -83,6 +91,10 @@ def dumps(fmap: FeatureMap) -> str:
         "touches": [{"feature": t.feature, "id": t.id, "index": t.index, "line": t.line,
                      "start": _plain(t.start), "direction": _plain(t.direction),
                      "reach": t.reach} for t in fmap.touches],
+        "statements": {
+            "skipped": [{"line": n, "statement": t, "reason": r} for n, t, r in fmap.skipped],
+            "notes": [{"line": n, "statement": t, "note": r} for n, t, r in fmap.notes],
+        },
     }
     return json.dumps(data, indent=2, sort_keys=True) + "\n"
 
@@ -131,7 +143,20 @@ def parse_feature_map(text: str | bytes, *, source: str = "<string>") -> Feature
                       r.get(program, "dialect", str, "program"),
                       r.get(program, "number", int, "program"),
                       r.get(program, "units", str, "program"),
-                      r.number(program, "ball_diameter", "program"), touches)
+                      r.number(program, "ball_diameter", "program"), touches,
+                      *_statement_rows(r, data.get("statements", {"skipped": [], "notes": []})))
+
+
+def _statement_rows(r: _Reader, table: Any) -> tuple[tuple[tuple[int, str, str], ...], ...]:
+    """The skipped and noted statements of a map (maps before them have none)."""
+    out = []
+    for key, why in (("skipped", "reason"), ("notes", "note")):
+        rows = r.get(table, key, list, "statements")
+        out.append(tuple((r.get(row, "line", int, f"statements.{key}[{k}]"),
+                          r.get(row, "statement", str, f"statements.{key}[{k}]"),
+                          r.get(row, why, str, f"statements.{key}[{k}]"))
+                         for k, row in enumerate(rows)))
+    return tuple(out)
 
 
 class _Reader:

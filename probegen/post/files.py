@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from probegen import ir
 from probegen.dialects import get_dialect
-from probegen.dmis.reader import read_dmis
+from probegen.dmis.reader import read_dmis_all
 from probegen.errors import UnsupportedError
 from probegen.files import write_file
 from probegen.ir.identity import map_identity
@@ -55,14 +55,14 @@ def post_file(program: str | Path, machine: MachineProfile, part: Part, *,
     loads it: :func:`probegen.cad.load_part`) at ``offset``.
 
     Raises:
-        ProgramParseError: the DMIS file does not parse.
+        ProgramParseError: the DMIS file does not parse (every bad statement listed).
         UnsupportedError, DmisProgramError, CollisionError: see ``post_dmis``.
     """
     target = get_dialect(dialect)
     if not target.RUNTIME_VARIABLES:
         raise UnsupportedError(f"post: dialect {dialect!r} is not a machine-tool dialect "
                                "with a DPRNT-style log; expected fanuc, haas or linuxcnc")
-    parsed = read_dmis(program)
+    parsed = read_dmis_all(program)
     posted = post_dmis(parsed, machine, obstacle=mesh_obstacle(part, offset),
                        skip_unsupported=skip_unsupported, reroute=reroute,
                        number=number, name=program_name(program))

@@ -289,7 +289,8 @@ def post_dmis(program: DmisFile, machine: MachineProfile, *,
     post.finish(last)
     return PostedProgram(ir.Program(setup, tuple(post.body)), tuple(post.touches),
                          tuple(post.skipped), tuple(post.rerouted), tuple(post.segments),
-                         tuple(post.dropped))
+                         tuple(post.dropped),
+                         tuple(SkippedStatement(*note) for note in state.notes))
 
 
 def _statement(post: _Post, state: VmState, recorder: _Recorder, st: Statement) -> None:

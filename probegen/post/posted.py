@@ -55,6 +55,8 @@ class PostedProgram:
         segments: the collision check's figures (empty without an obstacle).
         dropped_lines: lines of skipped statements the interpreter would execute (a
             sensor the machine does not have): the evaluation runs without them.
+        notes: statements executed with a note (a sensor that stands for the machine's
+            stylus: ``SNSLCT/SA``, ``RECALL/SA``, a zero-diameter ``SNSDEF``).
     """
 
     program: ir.Program
@@ -63,6 +65,7 @@ class PostedProgram:
     rerouted: tuple[int, ...]
     segments: tuple[SegmentClearance, ...]
     dropped_lines: tuple[int, ...]
+    notes: tuple[SkippedStatement, ...] = ()
 
     @property
     def move_clearance(self) -> float:

@@ -190,9 +190,13 @@ def do_save(state: VmState, st: Statement) -> None:
 
 
 def do_recall(state: VmState, st: Statement) -> None:
-    """``RECALL/D(x)`` or ``RECALL/DA(x)``: activate a stored frame (echoed)."""
+    """``RECALL/D(x)`` or ``RECALL/DA(x)``: activate a stored frame (echoed);
+    ``RECALL/SA(x)`` recalls a calibrated sensor: the machine's stylus (noted)."""
     if len(st.params) != 1:
-        raise state.error("RECALL expects one D(name) or DA(name)")
+        raise state.error("RECALL expects one D(name), DA(name) or SA(name)")
+    if isinstance(st.params[0], Label) and st.params[0].kind == "SA":
+        state.use_machine_stylus(st, f"{st.params[0]} is a calibrated sensor")
+        return
     ref = state.label(st.params[0], ("D", "DA"), "RECALL")
     table = state.frames if ref.kind == "D" else state.saved
     if ref.name not in table:

@@ -10,11 +10,14 @@ Conventions (details in the modules named):
 * Units: ``UNITS/MM|INCH,ANGDEC|ANGRAD``; everything is millimetres and machine
   coordinates inside, program units and the active PCS in statements and output.
 * Frames: :mod:`probegen.sim.cmm.frames` and :mod:`probegen.sim.cmm.datums`.
-* Stylus: the compensation radius is half the diameter of the selected ``SNSDEF``
-  sensor (the last ``SNSDEF/PROBE`` parameter), or ``cmm.ball_radius`` before any
-  ``SNSLCT``.  The CMM model's own ``ball_radius`` is never changed: it is the physical
-  ball; a program whose sensor differs from it measures with the error a wrongly
-  qualified stylus gives (bores ``2 * (r_program - r_ball)`` too large).
+* Stylus: the CMM model's ``ball_radius`` is the physical ball, touched and compensated
+  with.  ``SNSLCT/S(x)`` of a ``SNSDEF/PROBE`` sensor (ball diameter: the last
+  parameter) must agree with it within :data:`SENSOR_MATCH`; a different ball is not
+  executed (compensating with one ball while touching with another would make every
+  size wrong by the difference).  Sensors that stand for "the machine's stylus" map to
+  ``cmm.ball_radius`` with a note (:attr:`DmisRunResult.notes`), without any flag:
+  ``SNSLCT/SA(x)`` and ``RECALL/SA(x)`` (a sensor calibrated on the CMM) and a
+  ``SNSDEF`` whose ball diameter is 0.
 * PTMEAS ``x,y,z,i,j,k`` (nominal point, unit vector out of the material): the ball
   centre's target is ``p + r n``; the CMM moves straight to ``p + (r + APPRCH) n``,
   probes along ``-n`` at most ``APPRCH + SEARCH``, records the ball centre where it
@@ -45,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis
+from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis_all
 from probegen.errors import ProbegenError, UnsupportedError
 from probegen.geometry.frames import FloatArray, unit
 from probegen.sim.alarms import SimAlarm
@@ -130,6 +133,8 @@ class DmisRunResult:
         tolerances: evaluated tolerances by name.
         alarm: the alarm that stopped the run, with its line, or None.
         skipped: statements not executed (only with ``skip_unsupported=True``).
+        notes: statements executed with a note (line, text, the note): a sensor
+            mapped to the machine's calibrated stylus.
     """
 
     output: str
@@ -138,6 +143,11 @@ class DmisRunResult:
     tolerances: dict[str, ToleranceResult]
     alarm: SimAlarm | None
     skipped: tuple[SkippedStatement, ...]
+    notes: tuple[SkippedStatement, ...] = ()
+
+
+SENSOR_MATCH = 1e-4
+"""Largest difference, mm, between a program's sensor ball radius and the machine's."""
 
 
 def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
@@ -157,12 +167,12 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
         The run result; a machine alarm is reported in it, not raised.
 
     Raises:
-        ProgramParseError: ``program`` text does not parse.
+        ProgramParseError: ``program`` text does not parse (every bad statement listed).
         UnsupportedError: a statement the VM cannot execute (``source:line`` named).
         DmisProgramError: the program is wrong (undefined label, too few points ...).
     """
-    parsed = parse_dmis(program, source=source or "<string>") if isinstance(program, str) \
-        else program
+    parsed = parse_dmis_all(program, source=source or "<string>") \
+        if isinstance(program, str) else program
     start = arr(home) if home is not None else None
     state = VmState(cmm, source or parsed.source, compensation, start)
     skipped: list[SkippedStatement] = []
@@ -182,7 +192,8 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
     if alarm is None and not ended:
         raise state.error("the program ends without ENDFIL")
     return DmisRunResult(_output_text(state), dict(state.actuals), dict(state.nominals),
-                         dict(state.results), alarm, tuple(skipped))
+                         dict(state.results), alarm, tuple(skipped),
+                         tuple(SkippedStatement(*note) for note in state.notes))
 
 
 def _output_text(state: VmState) -> str:
@@ -267,29 +278,41 @@ def do_text(state: VmState, st: Statement) -> None:
 
 
 def do_snsdef(state: VmState, st: Statement) -> None:
-    """``S(x)=SNSDEF/PROBE,...,diameter``: a probe whose ball diameter is the last value."""
+    """``S(x)=SNSDEF/PROBE,...,diameter``: a probe whose ball diameter is the last value;
+    a diameter of 0 stands for the machine's calibrated stylus."""
     if st.label is None or st.label.kind != "S":
         raise state.error("SNSDEF must define a sensor: S(name)=SNSDEF/...")
     if not st.params or st.params[0] != "PROBE":
         raise NotExecutable("SNSDEF: only PROBE sensors are executed")
     diameter = state.length(st.params[-1], "SNSDEF diameter")
-    if diameter <= 0.0:
-        raise state.error(f"SNSDEF: the ball diameter must be positive, found {diameter}")
+    if diameter < 0.0:
+        raise state.error(f"SNSDEF: the ball diameter must be >= 0, found {diameter}")
     state.sensors[st.label.name] = diameter
 
 
 def do_snslct(state: VmState, st: Statement) -> None:
-    """``SNSLCT/S(x)``: compensate with that sensor's ball radius from now on."""
+    """``SNSLCT/S(x)``: compensate with that sensor's ball from now on, which must be the
+    machine's; ``SNSLCT/SA(x)`` and a zero-diameter sensor select the machine's stylus."""
     if not st.params:
-        raise state.error("SNSLCT expects S(name)")
+        raise state.error("SNSLCT expects S(name) or SA(name)")
     ref = st.params[0]
+    machine = float(state.cmm.ball_radius)
     if isinstance(ref, Label) and ref.kind == "SA":
-        raise NotExecutable("SNSLCT/SA(...): calibrated sensors are not executed")
+        state.use_machine_stylus(st, f"{ref} is a calibrated sensor")
+        return
     name = state.label(ref, ("S",), "SNSLCT").name
     if name not in state.sensors:
         state.check_skipped("S", name)
         raise state.error(f"S({name}) is not defined")
-    state.radius = state.sensors[name] / 2.0
+    diameter = state.sensors[name]
+    if diameter == 0.0:
+        state.use_machine_stylus(st, f"S({name}) has a zero ball diameter")
+        return
+    if abs(diameter / 2.0 - machine) > SENSOR_MATCH:
+        raise NotExecutable(f"the sensor's ball is D{diameter:g} mm, the machine's stylus "
+                            f"D{2 * machine:g} mm (give a machine profile with this stylus, "
+                            "or skip the SNSLCT to compensate with the machine's)")
+    state.radius = diameter / 2.0
 
 
 _SNSET = {"APPRCH": "approach", "RETRCT": "retract", "SEARCH": "search", "DEPTH": "depth"}

@@ -115,6 +115,7 @@ class VmState:
     results: dict[str, ToleranceResult] = field(default_factory=dict)
     sensors: dict[str, float] = field(default_factory=dict)
     radius: float | None = None
+    notes: list[tuple[int, str, str]] = field(default_factory=list)
     approach: float = DEFAULT_APPROACH
     retract: float = DEFAULT_RETRACT
     search: float = DEFAULT_SEARCH
@@ -216,6 +217,13 @@ class VmState:
             line = self.skipped_labels[key]
             raise NotExecutable(f"uses {kind}({name}), left undefined by the skipped "
                                 f"statement at line {line}")
+
+    def use_machine_stylus(self, st: Statement, why: str) -> None:
+        """Select the machine's calibrated stylus for ``st`` (a sensor that stands for it)
+        and note it (line, text, note)."""
+        self.radius = float(self.cmm.ball_radius)
+        self.notes.append((st.line, st.text, f"{why}: mapped to the machine's calibrated "
+                                             f"stylus D{2 * self.radius:g} mm"))
 
     def emit(self, text: str) -> None:
         """Append text (one or more lines) to the output file."""
