@@ -147,11 +147,13 @@ class LinuxCnc(Dialect):
         offset_check = self.next_label()
         return {
             "s": s, "units_code": self.UNITS_CODE[s.units],
-            "reset": " ".join(["G90", *self.reset_codes(s.reset_codes), self.PATH_MODE]),
+            "reset": " ".join(["G90", *self.reset_codes(self.reset_block(s)),
+                               self.PATH_MODE]),
             "offset_check": offset_check, "blocks": [self.block(n) for n in nodes],
             "ball": self.length(s.ball_diameter), "clearance": self.length(s.clearance_z),
             "name": self.comment(s.program_name),
             "log": self.LOG_FILE.format(number=s.program_number),
+            "work_offset": self.work_offset_word(s.work_offset),
         }
 
     def block(self, node: ir.Node) -> dict[str, Any]:
