@@ -242,3 +242,21 @@ def test_a_program_larger_than_the_memory_is_refused(tmp_path: Path) -> None:
                                                f"{size - 1} .*controller.program_memory"):
         program(tmp_path, controller=f"program_memory = {size - 1}")
     assert "ENDFIL" in program(tmp_path, "dmis", controller="program_memory = 1000")
+
+
+def test_sim_takes_the_operators_feed_override(in_repo: Path, tmp_path: Path) -> None:
+    """``probegen sim --feed-override 50`` runs the locked program to the same log (the
+    touches at the held feed); a dial at 0 is a usage error."""
+    from probegen.cli.app import ExitCode, main
+
+    spec = "samples/sphere25/sphere_test_iso.toml"
+    assert main(["compile", spec, "-o", str(tmp_path), "-q"]) == 0
+    logs = []
+    for pct in ("100", "50"):
+        log = tmp_path / f"{pct}.log"
+        assert main(["sim", str(tmp_path / "sphere_test_iso.nc"), "--spec", spec,
+                     "--feed-override", pct, "-o", str(log), "-q"]) == 0
+        logs.append(log.read_text(encoding="ascii"))
+    assert logs[0] == logs[1] and logs[0].count("\nPT ") == 25
+    assert main(["sim", str(tmp_path / "sphere_test_iso.nc"), "--spec", spec,
+                 "--feed-override", "0", "-o", "-"]) == ExitCode.USAGE

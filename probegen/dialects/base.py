@@ -60,8 +60,9 @@ class Dialect:
     LOCAL_FRAMES: ClassVar[bool] = False
     """Whether the language can translate its frame onto a measured feature."""
     PROFILE_LIMITS: ClassVar[bool] = True
-    """Whether the profile's ``[controller]`` line length and program memory apply (the
-    program runs on the machine tool's control; a DMIS program goes to a CMM)."""
+    """Whether the profile's ``[controller]`` line length and program memory apply (a
+    Macro B program in the control's memory; not DMIS, which goes to a CMM, nor
+    LinuxCNC, which reads files from disk)."""
     EXTENDED_OFFSET: ClassVar[str] = ""
     """The code selecting an extended work offset ``<code> Pn`` (``G54.1`` on Fanuc,
     ``G154`` on Haas), or "" where the control has none."""

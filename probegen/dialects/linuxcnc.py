@@ -57,6 +57,9 @@ class LinuxCnc(Dialect):
     NAME: ClassVar[str] = "linuxcnc"
     EXTENSION: ClassVar[str] = ".ngc"
     LINE_LENGTH: ClassVar[int] = 255
+    PROFILE_LIMITS: ClassVar[bool] = False
+    """rs274ngc reads 255-character lines and files from disk: the profile's
+    ``line_length`` and ``program_memory`` (a Fanuc-style control's) do not apply."""
     """rs274ngc reads at most 256 characters a line, the end of line included."""
     RUNTIME_VARIABLES: ClassVar[bool] = True
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
