@@ -12,6 +12,11 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
 * Touches are G31 at the probing feed from the approach point to ``overtravel`` past the
   nominal contact; if the skip position equals the end point the probe never triggered,
   and the program prints ``ERR NOTOUCH`` and stops with macro alarm 3001.
+* With controller option ``#3004`` (``ir.Setup.options``) each touch's G31 is preceded
+  by ``#3003=1`` ``#3004=2`` (no single block stop, feed override held at 100 %) and
+  followed by ``#3004=0`` ``#3003=0`` (``SKIP_LOCK``).
+* The work offset is ``G54``-``G59`` or ``G54.1 Pn`` (``EXTENDED_OFFSET``; Haas
+  ``G154 Pn``); the reset codes are the profile's less those of undeclared options.
 * ``RETRACT`` moves are G1 back along the approach line (the stylus may still be
   deflected at their start, so they are not skip moves).
 * Skip positions ``#5061-#5063`` are printed with DPRNT in the line format of

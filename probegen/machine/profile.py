@@ -24,10 +24,10 @@ WORK_OFFSETS = ("G54", "G55", "G56", "G57", "G58", "G59")
 EXTENDED_OFFSET = re.compile(r"(G54\.1|G154) P([1-9][0-9]{0,2})\Z")
 """An extended work offset: ``G54.1 Pn`` (Fanuc, P1-P300) or ``G154 Pn`` (Haas, P1-P99)."""
 EXTENDED_MAX = {"G54.1": 300, "G154": 99}
-EXTENDED_CODE = {"fanuc": "G54.1", "haas": "G154"}
-"""The extended work offset code of each dialect that has them."""
 """Highest P of each extended work offset code (Fanuc: 48 standard, 300 with the
 300-pair option; Haas: 99)."""
+EXTENDED_CODE = {"fanuc": "G54.1", "haas": "G154"}
+"""The extended work offset code of each dialect that has them."""
 
 OPTIONS: dict[str, str] = {
     "G68": "coordinate rotation G68/G69",
