@@ -260,3 +260,25 @@ def test_sim_takes_the_operators_feed_override(in_repo: Path, tmp_path: Path) ->
     assert logs[0] == logs[1] and logs[0].count("\nPT ") == 25
     assert main(["sim", str(tmp_path / "sphere_test_iso.nc"), "--spec", spec,
                  "--feed-override", "0", "-o", "-"]) == ExitCode.USAGE
+
+
+@settings(max_examples=examples(60))
+@given(st.sampled_from(["fanuc", "haas", "linuxcnc", "dmis"]),
+       st.one_of(st.sampled_from(["G54", "G59", "G54.1 P1", "G54.1 P300", "G154 P99",
+                                  "G154 P1", "G54.1 P0", "G154 P100", "G54.1 P301"]),
+                 st.text(alphabet="G54.1 P0239", max_size=10)))
+def test_any_work_offset_is_accepted_or_refused(dialect: str, name: str) -> None:
+    """A work offset is one of the six, or the dialect's own extended code with P in its
+    range; anything else is a SpecError naming the key."""
+    from probegen.machine.profile import EXTENDED_CODE, EXTENDED_MAX, check_work_offset
+
+    code = EXTENDED_CODE.get(dialect)
+    found = re.fullmatch(r"(G54\.1|G154) P([1-9][0-9]*)", name)
+    ok = name in ("G54", "G55", "G56", "G57", "G58", "G59") or bool(
+        code and found and found[1] == code and int(found[2]) <= EXTENDED_MAX[code])
+    try:
+        assert check_work_offset(name, dialect, "m.toml: machine.work_offset") == name
+    except SpecError as exc:
+        assert not ok and str(exc).startswith("m.toml: machine.work_offset: expected G54")
+    else:
+        assert ok
