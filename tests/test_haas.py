@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -47,11 +48,14 @@ def test_only_the_reset_codes_differ_from_fanuc(in_repo: Path, spec_path: Path) 
     fanuc = get_dialect("fanuc").generate(program).splitlines()
     haas = get_dialect("haas").generate(program).splitlines()
     differ = [(f, h) for f, h in zip(fanuc, haas, strict=True) if f != h]
-    reset = ("G90 G17 G40 G49 G80 G94 G69 G15 G50.1", "G90 G17 G40 G49 G80 G94 G69 G100")
-    # and a radius wear correction: Haas D offsets are diameters
-    wear = [(f, h) for f, h in differ[1:]
+    # the sample profile lists G15 and G50.1 among its reset codes but declares neither
+    # option: both programs leave them out, so the reset blocks are the same (the Haas
+    # words for them: test_reset_codes_in_haas_words)
+    assert "G90 G17 G40 G49 G80 G94 G69" in fanuc and "G90 G17 G40 G49 G80 G94 G69" in haas
+    # only a radius wear correction differs: Haas D offsets are diameters
+    wear = [(f, h) for f, h in differ
             if "G10 L13" in f and h == re.sub(r" R(#\d+)$", r" R[2.0*\1]", f)]
-    assert differ[0] == reset and len(wear) == len(differ) - 1
+    assert len(wear) == len(differ)
     assert len(wear) == (1 if "update_tool" in spec_path.read_text(encoding="utf-8") else 0)
 
 
@@ -83,10 +87,16 @@ def test_reserved_variable_ranges_are_refused(base: int, reserved: str) -> None:
 
 
 def test_haas_program_runs_on_the_virtual_machine(in_repo: Path) -> None:
-    """The Haas text measures on a Haas control as Fanuc's does on a Fanuc control; each
-    stops on the other's control with alarm 10 at its reset block (line 7)."""
+    """The Haas text measures on a Haas control as Fanuc's does on a Fanuc control; with
+    the polar and mirror options declared (G15 and G50.1 in the reset block) each stops on
+    the other's control with alarm 10 at its reset block (line 7); without them
+    (the sample profile) the Fanuc program runs on the Haas control too."""
     spec = load_spec(Path("samples/sphere25/sphere_test_iso.toml"))
-    program = plan_program(spec, runtime_variables=True).program
+    plain = plan_program(spec, runtime_variables=True).program
+    res = run_text(get_dialect("fanuc").generate(plain), vm(), kind="macrob", control="haas")
+    assert res.alarm is None and res.touches == 25
+    program = dataclasses.replace(plain, setup=dataclasses.replace(
+        plain.setup, options=(*(plain.setup.options or ()), "G15", "G50.1")))
     texts = {name: get_dialect(name).generate(program) for name in ("fanuc", "haas")}
     logs = []
     for name in ("fanuc", "haas"):
@@ -119,9 +129,9 @@ def test_the_haas_control_knows_the_haas_g_codes(block: str, alarm: str | None) 
 
 def test_sim_picks_the_haas_control_by_the_file_name(in_repo: Path, tmp_path: Path,
                                                      capsys: pytest.CaptureFixture[str]) -> None:
-    spec = "samples/sphere25/sphere_test_iso.toml"
+    spec = str(mirror_option_spec(tmp_path))  # G50.1 declared: G100 in the reset block
     assert main(["compile", spec, "-d", "haas", "-o", str(tmp_path), "-q"]) == ExitCode.OK
-    program = tmp_path / "sphere_test_iso.haas.nc"
+    program = tmp_path / "spec.haas.nc"
     assert program_control(program) == "haas"
     assert main(["sim", str(program), "--spec", spec, "-o", str(tmp_path / "run.log"),
                  "-q"]) == ExitCode.OK
@@ -133,6 +143,20 @@ def test_sim_picks_the_haas_control_by_the_file_name(in_repo: Path, tmp_path: Pa
     assert "alarm 10 IMPROPER G-CODE (G100)" in capsys.readouterr().err
     assert main(["sim", str(renamed), "--control", "haas", "--spec", spec,
                  "-o", str(tmp_path / "renamed.log"), "-q"]) == ExitCode.OK
+
+
+def mirror_option_spec(tmp_path: Path) -> Path:
+    """The ISO sphere test on the sample machine with the mirror option declared."""
+    machines = REPO / "samples" / "machines"
+    profile = (machines / "vmc-fanuc.toml").read_text(encoding="utf-8")
+    assert "\noptions = [" in profile
+    profile = profile.replace("\noptions = [", '\noptions = ["G50.1", ', 1)
+    (tmp_path / "machine.toml").write_text(profile, encoding="utf-8")
+    source = REPO / "samples" / "sphere25" / "sphere_test_iso.toml"
+    spec = source.read_text(encoding="utf-8").replace("../machines/vmc-fanuc.toml",
+                                                      "machine.toml")
+    (tmp_path / "spec.toml").write_text(spec, encoding="utf-8")
+    return tmp_path / "spec.toml"
 
 
 def test_rotary_sim_runs_the_haas_rotary_program(in_repo: Path, tmp_path: Path) -> None:

@@ -90,7 +90,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
-                          control=args.control or program_control(args.program))
+                          control=args.control or program_control(args.program),
+                          feed_override=args.feed_override)
     data = result.output.encode("ascii", errors="replace")
     if isinstance(link, PtyLink):
         print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
@@ -286,6 +287,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
     sm.add_argument("--control", choices=tuple(CONTROLS),
                     help="the Macro B control (default: haas for a .haas.nc file, else fanuc)")
+    sm.add_argument("--feed-override", type=positive, default=100.0, metavar="PCT",
+                    help="the operator's feed override, percent (Macro B: G1 and G31 feeds, "
+                         "except while #3004 holds it at 100)")
     sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",

@@ -20,11 +20,12 @@ if TYPE_CHECKING:
 def _compile(args: argparse.Namespace) -> int:
     from probegen.cli.progress import Bar
     from probegen.dialects import get_dialect
-    from probegen.planning import part_of, plan_program
+    from probegen.planning import check_options, part_of, plan_program
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
     spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
+    check_options(spec)
     names = args.dialect or [spec.dialect]
     part: Part | None = None
     outputs = []

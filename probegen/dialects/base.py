@@ -22,6 +22,12 @@ if TYPE_CHECKING:
     import jinja2
 
 REGISTRY: dict[str, type[Dialect]] = {}
+RESET_NEEDS: dict[str, tuple[str, ...]] = {
+    "G69": ("G68", "G68.2"), "G15": ("G15",), "G50.1": ("G50.1",)}
+"""Reset codes that cancel an optional mode, and the controller options (any one of them)
+they need: a program whose setup states its options (``ir.Setup.options``) leaves such
+a code out of the reset block when none is declared (a control without the option cannot
+be in the mode, and may refuse the code: alarm 10 on a Fanuc)."""
 
 
 def get_dialect(name: str) -> Dialect:
@@ -53,6 +59,13 @@ class Dialect:
     """Whether the controller computes with variables at run time (``ir.Var``, ``Assign``)."""
     LOCAL_FRAMES: ClassVar[bool] = False
     """Whether the language can translate its frame onto a measured feature."""
+    PROFILE_LIMITS: ClassVar[bool] = True
+    """Whether the profile's ``[controller]`` line length and program memory apply (a
+    Macro B program in the control's memory; not DMIS, which goes to a CMM, nor
+    LinuxCNC, which reads files from disk)."""
+    EXTENDED_OFFSET: ClassVar[str] = ""
+    """The code selecting an extended work offset ``<code> Pn`` (``G54.1`` on Fanuc,
+    ``G154`` on Haas), or "" where the control has none."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -63,6 +76,8 @@ class Dialect:
         self.units = "mm"
         self.shift: ir.Vec3 = (0.0, 0.0, 0.0)
         """The head shift of the last ``ir.Rotary`` (ball centre less commanded point)."""
+        self.limits: ir.Setup | None = None
+        """The setup of the program being written (its controller limits)."""
 
     # -- numbers ------------------------------------------------------------------
     def scale(self, mm: float) -> float:
@@ -119,9 +134,39 @@ class Dialect:
         return " ".join(words)
 
     @staticmethod
-    def offset_number(work_offset: str) -> int:
-        """The ``P`` of ``G10 L2`` for work offset ``G54`` .. ``G59`` (1 .. 6)."""
+    def reset_block(setup: ir.Setup) -> tuple[str, ...]:
+        """The setup's reset codes less those whose option it does not declare
+        (``RESET_NEEDS``); all of them when the setup states no options."""
+        options = setup.options
+        if options is None:
+            return setup.reset_codes
+        return tuple(code for code in setup.reset_codes
+                     if code not in RESET_NEEDS or any(o in options for o in RESET_NEEDS[code]))
+
+    def offset_number(self, work_offset: str) -> int:
+        """The ``P`` of ``G10 L2`` for work offset ``G54`` .. ``G59`` (1 .. 6).
+
+        Raises:
+            UnsupportedError: an extended work offset (``G10 L20``: the dialect says).
+        """
+        if extended_p(work_offset):
+            raise self.unsupported(ir.Comment(work_offset), "G10 L2 writes G54-G59 only")
         return int(work_offset[1:]) - 53
+
+    def work_offset_word(self, work_offset: str) -> str:
+        """The block selecting ``work_offset``: ``G54``-``G59`` as they are, an extended
+        offset (``G54.1 Pn`` or ``G154 Pn``, the same P) in this dialect's code.
+
+        Raises:
+            UnsupportedError: an extended offset on a dialect without them.
+        """
+        p = extended_p(work_offset)
+        if not p:
+            return work_offset
+        if not self.EXTENDED_OFFSET:
+            raise UnsupportedError(f"dialect {self.NAME!r} has no extended work offsets, "
+                                   f"found work offset {work_offset!r}; use G54-G59")
+        return f"{self.EXTENDED_OFFSET} P{p}"
 
     def var(self, name: str) -> str:
         """How the program names run-time value ``name``; dialects with variables say."""
@@ -171,21 +216,56 @@ class Dialect:
         """The program text; lines end with ``\\n``; byte-for-byte repeatable."""
         self.units = program.setup.units
         self.shift = (0.0, 0.0, 0.0)
+        self.limits = program.setup
         text = self.render("program.j2", **self.lower(program))
         self.check_lines(text)
+        self.check_size(text)
         return text
 
     def lower(self, program: ir.Program) -> dict[str, Any]:
         """The template context for ``program``; each dialect defines it."""
         raise NotImplementedError
 
+    def line_limit(self) -> tuple[int, str]:
+        """The longest line allowed and what sets it: the dialect's ``LINE_LENGTH`` or the
+        profile's ``[controller] line_length`` when that is shorter."""
+        own = self.LINE_LENGTH
+        limits = self.limits if self.PROFILE_LIMITS else None
+        if limits is not None and 0 < limits.line_length < own:
+            return limits.line_length, f"{limits.limits_source}: controller.line_length"
+        return own, f"dialect {self.NAME!r}"
+
     def check_lines(self, text: str) -> None:
         """Refuse output the controller would not accept (line length, characters)."""
+        limit, source = self.line_limit()
         for number, line in enumerate(text.split("\n"), start=1):
-            if len(line) > self.LINE_LENGTH:
+            if len(line) > limit:
                 raise UnsupportedError(f"dialect {self.NAME!r}: line {number} is {len(line)} "
-                                       f"characters, expected at most {self.LINE_LENGTH}: "
+                                       f"characters, expected at most {limit} ({source}): "
                                        f"{line!r}")
             if not line.isascii():
                 raise UnsupportedError(f"dialect {self.NAME!r}: line {number} has non-ASCII "
                                        f"text: {line!r}")
+
+    def check_size(self, text: str) -> None:
+        """Refuse a program larger than the profile's ``[controller] program_memory``
+        (bytes as written: ASCII, one byte per character and line end).
+
+        Raises:
+            UnsupportedError: names the size, the limit and the profile key.
+        """
+        limits = self.limits if self.PROFILE_LIMITS else None
+        size = len(text.encode("ascii", "replace"))
+        if limits is None or not limits.program_memory or size <= limits.program_memory:
+            return
+        raise UnsupportedError(
+            f"dialect {self.NAME!r}: the program is {size} bytes, expected at most "
+            f"{limits.program_memory} ({limits.limits_source}: controller.program_memory); "
+            "measure fewer features per program (split the spec) or raise the limit if the "
+            "control has the memory free")
+
+
+def extended_p(work_offset: str) -> int:
+    """The P of an extended work offset (``G54.1 P12``, ``G154 P12``: 12), else 0."""
+    head, _, p = work_offset.partition(" P")
+    return int(p) if head in ("G54.1", "G154") and p.isdigit() else 0

@@ -37,6 +37,7 @@ class Dmis(Dialect):
     NAME: ClassVar[str] = "dmis"
     EXTENSION: ClassVar[str] = ".dmi"
     LINE_LENGTH: ClassVar[int] = 256
+    PROFILE_LIMITS: ClassVar[bool] = False
     LOCAL_FRAMES: ClassVar[bool] = True
     UNITS_WORD: ClassVar[dict[str, str]] = {"mm": "MM", "inch": "INCH"}
     """The DMIS length unit word for each unit system."""

@@ -12,6 +12,11 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
 * Touches are G31 at the probing feed from the approach point to ``overtravel`` past the
   nominal contact; if the skip position equals the end point the probe never triggered,
   and the program prints ``ERR NOTOUCH`` and stops with macro alarm 3001.
+* With controller option ``#3004`` (``ir.Setup.options``) each touch's G31 is preceded
+  by ``#3003=1`` ``#3004=2`` (no single block stop, feed override held at 100 %) and
+  followed by ``#3004=0`` ``#3003=0`` (``SKIP_LOCK``).
+* The work offset is ``G54``-``G59`` or ``G54.1 Pn`` (``EXTENDED_OFFSET``; Haas
+  ``G154 Pn``); the reset codes are the profile's less those of undeclared options.
 * ``RETRACT`` moves are G1 back along the approach line (the stylus may still be
   deflected at their start, so they are not skip moves).
 * Skip positions ``#5061-#5063`` are printed with DPRNT in the line format of
@@ -32,7 +37,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from probegen import ir
-from probegen.dialects.fanuc_actions import lower_action
+from probegen.dialects.fanuc_actions import lower_action, offset_words
 from probegen.dialects.macro_b import SCRATCH, MacroB
 
 
@@ -44,6 +49,12 @@ class Fanuc(MacroB):
     LINE_LENGTH: ClassVar[int] = 80
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
     """The G code for each unit system."""
+    EXTENDED_OFFSET: ClassVar[str] = "G54.1"
+    SKIP_LOCK: ClassVar[tuple[tuple[str, str], ...]] = (("#3003", "1"), ("#3004", "2"))
+    """Set before every touch's G31 when the profile declares option ``#3004``, each set to
+    0 after it: ``#3003`` bit 0 suppresses single block stops, ``#3004`` bit 1 (2) holds
+    feed override at 100 % (bit 0, feed hold, and bit 2, exact stop, stay enabled: the
+    operator can still stop the machine)."""
 
     def check_lines(self, text: str) -> None:
         """Line length and characters, and the length of every alarm message."""
@@ -61,9 +72,11 @@ class Fanuc(MacroB):
         blocks = [self.block(node) for node in nodes]
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
+            "reset_codes": self.reset_block(s),
             "ball": self.length(s.ball_diameter),
             "clearance": self.length(s.clearance_z),
             "first_var": self.base, "last_var": self.base + SCRATCH + 3,
+            "work_offset": self.work_offset_word(s.work_offset),
         }
 
     def block(self, node: ir.Node) -> dict[str, Any]:
@@ -95,8 +108,8 @@ class Fanuc(MacroB):
         return {"kind": "rotary", "words": self.rotary_words(node)}
 
     def offset_shift(self, node: ir.WorkOffsetShift) -> dict[str, Any]:
-        number = self.offset_number(node.work_offset)
-        return {"kind": "offset", "p": number, "xyz": [self.length(v) for v in node.shift]}
+        words, _ = offset_words(self.work_offset_word(node.work_offset))
+        return {"kind": "offset", "words": words, "xyz": [self.length(v) for v in node.shift]}
 
     def centre(self, node: ir.ReportCentre) -> dict[str, Any]:
         xyz = []
@@ -133,7 +146,16 @@ class Fanuc(MacroB):
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.probe_feed),
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label(),
                 "tag": node.role.value, "feature": node.feature, "index": node.index,
-                "stores": stores, "fmt": self.DPRNT_FORMAT[self.units]}
+                "stores": stores, "fmt": self.DPRNT_FORMAT[self.units],
+                **self.skip_lock()}
+
+    def skip_lock(self) -> dict[str, list[str]]:
+        """The blocks before (``lock``) and after (``unlock``) a touch's G31 that hold
+        single block and feed override (``SKIP_LOCK``), empty without option ``#3004``."""
+        if "#3004" not in (self.setup.options or ()):
+            return {"lock": [], "unlock": []}
+        return {"lock": [f"{v}={value}" for v, value in self.SKIP_LOCK],
+                "unlock": [f"{v}=0" for v, _ in reversed(self.SKIP_LOCK)]}
 
     def assign(self, node: ir.Assign) -> dict[str, Any]:
         if node.b is not None:

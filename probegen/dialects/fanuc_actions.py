@@ -260,8 +260,8 @@ def minus(d: MacroB, value: float, decimals: int | None = None) -> str:
 
 def offset_words(name: str) -> tuple[str, int]:
     """``G10 L2 Pn`` / ``G10 L20 Pn`` words and the first variable (X) of work offset
-    ``name`` (``G54``-``G59``, ``G54.1 Pn``)."""
-    if name.startswith("G54.1"):
+    ``name`` (``G54``-``G59``, ``G54.1 Pn``, Haas ``G154 Pn``: the same numbers)."""
+    if name.startswith(("G54.1", "G154")):
         p = int(name.split("P")[1])
         first = 7001 + 20 * (p - 1) if p <= 48 else 14001 + 20 * (p - 1)
         return f"L20 P{p}", first

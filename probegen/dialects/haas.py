@@ -10,7 +10,6 @@ know it: G100, G15).
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, ClassVar
 
 from probegen import ir
@@ -28,6 +27,9 @@ class Haas(Fanuc):
     """Haas reads ``.nc`` files; the inner suffix keeps them apart from Fanuc output."""
     TEMPLATES: ClassVar[str] = "fanuc"
     """The program text is Fanuc Macro B: the templates are Fanuc's."""
+    EXTENDED_OFFSET: ClassVar[str] = "G154"
+    """Haas mill G-code list: G154 P1-P99 selects the additional work offsets (Fanuc's
+    G54.1 Pn, the same variables #7001-/#14001-, written with G10 L20 Pn)."""
     RESET_CODES: ClassVar[dict[str, str | None]] = {"G15": None, "G50.1": "G100"}
     """Haas mill G-code list: no polar-coordinate mode (G15/G16), and mirror image is
     cancelled with G100 (G101 sets it), not G50.1."""
@@ -49,8 +51,7 @@ class Haas(Fanuc):
         for node in program.body:
             self.check_action_variable(node)
         context = super().lower(program)
-        s: ir.Setup = context["s"]
-        context["s"] = dataclasses.replace(s, reset_codes=self.reset_codes(s.reset_codes))
+        context["reset_codes"] = self.reset_codes(context["reset_codes"])
         return context
 
     def reset_codes(self, codes: tuple[str, ...]) -> tuple[str, ...]:

@@ -57,6 +57,9 @@ class LinuxCnc(Dialect):
     NAME: ClassVar[str] = "linuxcnc"
     EXTENSION: ClassVar[str] = ".ngc"
     LINE_LENGTH: ClassVar[int] = 255
+    PROFILE_LIMITS: ClassVar[bool] = False
+    """rs274ngc reads 255-character lines and files from disk: the profile's
+    ``line_length`` and ``program_memory`` (a Fanuc-style control's) do not apply."""
     """rs274ngc reads at most 256 characters a line, the end of line included."""
     RUNTIME_VARIABLES: ClassVar[bool] = True
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
@@ -147,11 +150,13 @@ class LinuxCnc(Dialect):
         offset_check = self.next_label()
         return {
             "s": s, "units_code": self.UNITS_CODE[s.units],
-            "reset": " ".join(["G90", *self.reset_codes(s.reset_codes), self.PATH_MODE]),
+            "reset": " ".join(["G90", *self.reset_codes(self.reset_block(s)),
+                               self.PATH_MODE]),
             "offset_check": offset_check, "blocks": [self.block(n) for n in nodes],
             "ball": self.length(s.ball_diameter), "clearance": self.length(s.clearance_z),
             "name": self.comment(s.program_name),
             "log": self.LOG_FILE.format(number=s.program_number),
+            "work_offset": self.work_offset_word(s.work_offset),
         }
 
     def block(self, node: ir.Node) -> dict[str, Any]:

@@ -84,6 +84,13 @@ class Setup:
         calibration: the probe calibration's header comment lines (upper case, no
             parentheses) when the program was compiled with one, else empty.
         calibration_id: its fingerprint (printed in the ``PGCAL`` line), or "".
+        options: the controller options the machine declares (``[controller] options``),
+            or None when not stated (posted and hand-made programs: every reset code is
+            written, no override lock); the dialect writes the reset codes of optional
+            modes and ``#3003``/``#3004`` around touches only when declared.
+        line_length: the control's longest block, characters (0: the dialect's own).
+        program_memory: the memory free for the program, bytes (0: not checked).
+        limits_source: where the limits come from, for messages (the profile path).
     """
 
     program_number: int
@@ -105,6 +112,10 @@ class Setup:
     identity: str = ""
     calibration: tuple[str, ...] = ()
     calibration_id: str = ""
+    options: tuple[str, ...] | None = None
+    line_length: int = 0
+    program_memory: int = 0
+    limits_source: str = ""
 
 
 @dataclass(frozen=True, slots=True)

@@ -126,11 +126,14 @@ def canonical(value: Any) -> str:
 
 
 _LEFT_OUT = {("Setup", "identity"), ("Setup", "calibration"), ("Setup", "calibration_id"),
-             ("Check", "corrections"), ("Check", "ball_radius")}
+             ("Check", "corrections"), ("Check", "ball_radius"), ("Setup", "options"),
+             ("Setup", "line_length"), ("Setup", "program_memory"),
+             ("Setup", "limits_source")}
 """Fields the identity leaves out: the identity itself, and the probe calibration a program
 was compiled with and the radius it gives the on-control fits (its own ``PGCAL`` line ties
 the log to it, and ingest warns when it differs: a recalibrated program measures the same
-touches)."""
+touches); and the control's options and limits (which reset codes and override locks the
+text carries, how long it may be: the same touches either way)."""
 
 
 def _at_default(field: dataclasses.Field[Any], value: Any) -> bool:

@@ -7,18 +7,45 @@ per minute.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.constants import MM_PER_INCH
-from probegen.errors import SpecError
+from probegen.errors import SpecError, did_you_mean
 from probegen.files import Table, load_toml
 
 if TYPE_CHECKING:
     from probegen.machine.calibration import ProbeCalibration
 
 WORK_OFFSETS = ("G54", "G55", "G56", "G57", "G58", "G59")
+"""The six standard work offsets every control has."""
+EXTENDED_OFFSET = re.compile(r"(G54\.1|G154) P([1-9][0-9]{0,2})\Z")
+"""An extended work offset: ``G54.1 Pn`` (Fanuc, P1-P300) or ``G154 Pn`` (Haas, P1-P99)."""
+EXTENDED_MAX = {"G54.1": 300, "G154": 99}
+"""Highest P of each extended work offset code (Fanuc: 48 standard, 300 with the
+300-pair option; Haas: 99)."""
+EXTENDED_CODE = {"fanuc": "G54.1", "haas": "G154"}
+"""The extended work offset code of each dialect that has them."""
+
+OPTIONS: dict[str, str] = {
+    "G68": "coordinate rotation G68/G69",
+    "G68.2": "tilted working plane G68.2/G69",
+    "G15": "polar coordinate command G15/G16",
+    "G50.1": "programmable mirror image G50.1/G51.1 (Haas G100/G101)",
+    "G54.1": "additional work coordinate systems G54.1 Pn (Fanuc)",
+    "G154": "additional work coordinate systems G154 Pn (Haas)",
+    "#3004": "macro control of single block and feed override (#3003/#3004)",
+}
+"""Controller options a program may need, by the G code (or variable) that names them in
+``[controller] options``, with what they are."""
+DEFAULT_OPTIONS: dict[str, tuple[str, ...]] = {
+    "fanuc": ("G68", "#3004"),
+    "haas": ("G68", "G50.1", "G154"),
+}
+"""Options of a profile that does not list them, by dialect (others: none): what every
+control of the family has as standard (see ``docs/spec.md``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,9 +95,15 @@ class Controller:
         tool_change: whether the program calls the probe with ``T.. M6``.
         reset_codes: modal codes the header sets so that nothing is left to chance
             (plane, cutter and length compensation off, canned cycles off, feed per
-            minute, rotation off...); drop a code the control lacks the option for.
+            minute, rotation off...); the dialect writes a code that cancels an optional
+            mode (G69, G15, G50.1) only when ``options`` declares the option
+            (``dialects.base.RESET_NEEDS``).
         program_numbers: the O numbers probegen may give a program, ``(first, last)``
             (``[controller] program_numbers``; default :func:`default_program_numbers`).
+        options: the controller options the machine has (keys of :data:`OPTIONS`;
+            default :data:`DEFAULT_OPTIONS` of the dialect).
+        program_memory: the part-program memory free for one program, bytes (0: not
+            checked).
     """
 
     line_length: int
@@ -80,6 +113,12 @@ class Controller:
     tool_change: bool
     reset_codes: tuple[str, ...]
     program_numbers: tuple[int, int] = (1, 8999)
+    options: tuple[str, ...] = ()
+    program_memory: int = 0
+
+    def has(self, option: str) -> bool:
+        """Whether the profile declares ``option`` (a key of :data:`OPTIONS`)."""
+        return option in self.options
 
 
 DEFAULT_RESET = ("G17", "G40", "G49", "G80", "G94", "G69")
@@ -154,6 +193,18 @@ class MachineProfile:
                         f"{number}{why}; to use it, set [controller] program_numbers = "
                         "[first, last] in the machine profile to a range that holds it")
 
+    def require(self, option: str, where: str, what: str) -> None:
+        """Refuse ``what`` (set at ``where``) when the profile lacks ``option``.
+
+        Raises:
+            SpecError: names the option, what needs it and the profile key.
+        """
+        if self.controller.has(option):
+            return
+        raise SpecError(f"{where}: {what} needs the controller option {option} "
+                        f"({OPTIONS[option]}), which {self.source} does not declare; add "
+                        f"{option!r} to [controller] options if the control has it")
+
 
 def load_profile(path: str | Path) -> MachineProfile:
     """Load and validate a machine profile; errors name the file and key path."""
@@ -167,7 +218,7 @@ def load_profile(path: str | Path) -> MachineProfile:
         name=m.get_str("name", required=True) or "",
         dialect=dialect,
         units=units,
-        work_offset=m.get_str("work_offset", "G54", choices=WORK_OFFSETS) or "G54",
+        work_offset=_work_offset(m, dialect),
         clearance_z=k * (m.get_float("clearance_z", required=True) or 0.0),
         margin=k * (m.get_float("margin", 0.5, positive=True) or 0.5),
         probe=_probe(root.table("probe", required=True), k),
@@ -178,7 +229,36 @@ def load_profile(path: str | Path) -> MachineProfile:
     )
     m.done()
     root.done()
+    if EXTENDED_OFFSET.match(profile.work_offset):
+        profile.require(profile.work_offset.split()[0], f"{file}: machine.work_offset",
+                        f"work offset {profile.work_offset}")
     return profile
+
+
+def _work_offset(m: Table, dialect: str) -> str:
+    """``[machine] work_offset``: G54-G59, or ``G54.1 Pn`` (Fanuc) / ``G154 Pn`` (Haas)."""
+    name = m.get_str("work_offset", "G54") or "G54"
+    return check_work_offset(name, dialect, m.where("work_offset"))
+
+
+def check_work_offset(name: str, dialect: str, where: str) -> str:
+    """``name`` if it is a work offset ``dialect`` can select.
+
+    Raises:
+        SpecError: not G54-G59 nor an extended offset of the dialect (``G54.1 Pn`` on
+            Fanuc, ``G154 Pn`` on Haas), or P out of range.
+    """
+    if name in WORK_OFFSETS:
+        return name
+    extended = EXTENDED_CODE.get(dialect, "")
+    found = EXTENDED_OFFSET.match(name)
+    if not extended:
+        hint = f" (dialect {dialect!r} has no extended work offsets)"
+    else:
+        hint = f" or \"{extended} Pn\" (n 1-{EXTENDED_MAX[extended]})"
+        if found and found[1] == extended and int(found[2]) <= EXTENDED_MAX[extended]:
+            return name
+    raise SpecError(f"{where}: expected G54 to G59{hint}, found {name!r}")
 
 
 def _probe(t: Table, k: float) -> Probe:
@@ -224,7 +304,10 @@ def _controller(t: Table, dialect: str) -> Controller:
         tool_change=t.get_bool("tool_change", True),
         reset_codes=t.get_str_list("reset_codes", DEFAULT_RESET),
         program_numbers=_program_numbers(t, dialect),
+        options=_options(t, dialect),
+        program_memory=t.get_int("program_memory", 0, minimum=0) or 0,
     )
+
     t.done()
     return c
 
@@ -241,3 +324,16 @@ def _program_numbers(t: Table, dialect: str) -> tuple[int, int]:
         raise t.fail("program_numbers", f"[first, last] program numbers with "
                                         f"1 <= first <= last <= {PROGRAM_NUMBER_MAX}")
     return value[0], value[1]
+
+
+def _options(t: Table, dialect: str) -> tuple[str, ...]:
+    """``options = [...]``: keys of :data:`OPTIONS`, sorted; the dialect's default when
+    absent."""
+    if not t.has("options"):
+        return DEFAULT_OPTIONS.get(dialect, ())
+    names = t.get_str_list("options")
+    for name in names:
+        if name not in OPTIONS:
+            raise t.fail("options", "an array of controller options out of "
+                                    f"{', '.join(OPTIONS)}{did_you_mean(name, OPTIONS)}")
+    return tuple(sorted(set(names)))

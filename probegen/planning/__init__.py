@@ -16,7 +16,13 @@ from typing import TYPE_CHECKING
 from probegen import ir
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
-from probegen.planning.actions import final_actions, planar_check, revolved_check, sphere_offset
+from probegen.planning.actions import (
+    check_options,
+    final_actions,
+    planar_check,
+    revolved_check,
+    sphere_offset,
+)
 from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.identity import program_identity
@@ -34,7 +40,8 @@ from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
 if TYPE_CHECKING:
     from probegen.cad import Part
 
-__all__ = ["PlannedProgram", "calibration_header", "make_setup", "part_of", "plan_program",
+__all__ = ["PlannedProgram", "calibration_header", "check_options", "make_setup", "part_of",
+           "plan_program",
            "setup_for"]
 
 

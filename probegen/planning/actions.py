@@ -20,10 +20,10 @@ from probegen import ir
 from probegen.errors import SpecError
 from probegen.ir.actions import Align, Check, Limit, SetWorkOffset, UpdateTool, point_names, result
 from probegen.machine.calibration import calibrated_centres, for_stylus
-from probegen.machine.profile import MachineProfile
+from probegen.machine.profile import WORK_OFFSETS, MachineProfile
 from probegen.planning.planar import PlanarPlan, direction_degrees
 from probegen.spec.actions import PlanarSpec
-from probegen.spec.model import RevolvedSpec, SphereTest
+from probegen.spec.model import RevolvedSpec, Spec, SphereTest
 
 AXIS_ALIGNED = 1.0 - 1e-9
 """A line's or plane's normal counts as along an axis when that component exceeds this."""
@@ -162,6 +162,30 @@ def sphere_offset(feature: SphereTest, centre: ir.Vec3, running: str) -> SetWork
     shifts = tuple((i, f"{feature.id}_C{'XYZ'[i]}", centre[i])
                    for i in range(3) if "XYZ"[i] in w.axes)
     return SetWorkOffset(feature.id, w.offset, running, shifts)
+
+
+def check_options(spec: Spec) -> None:
+    """Refuse an action that needs a controller option the machine profile does not
+    declare (``[controller] options``): ``align = { mode = "g68" }`` needs G68,
+    ``set_work_offset`` to ``G54.1 Pn`` needs the extended work offsets (``G54.1``, on a
+    Haas profile ``G154``).
+
+    Raises:
+        SpecError: names the feature's key, the option and the profile key.
+    """
+    machine = spec.machine
+    extended = "G154" if machine.dialect == "haas" else "G54.1"
+    for feature in spec.features:
+        actions = getattr(feature, "actions", None)
+        if actions is None:
+            continue
+        if actions.align is not None and actions.align.mode == "g68":
+            machine.require("G68", f"{feature.where}.align.mode",
+                            "align = { mode = \"g68\" } (G68 rotation)")
+        w = actions.work_offset
+        if w is not None and w.offset not in WORK_OFFSETS:
+            machine.require(extended, f"{feature.where}.set_work_offset.offset",
+                            f"work offset {w.offset}")
 
 
 def final_actions(checked: Sequence[tuple[RevolvedSpec | PlanarSpec, Check]],

@@ -262,7 +262,10 @@ def build_program(spec: GratingSpec, plan: SetupPlan, number: int,
         tool_change=c.tool_change if c else True, position_feed=spec.feed,
         probe_feed=spec.feed, probe_on=(), probe_off=(),
         variable_base=c.variable_base if c else 100,
-        reset_codes=c.reset_codes if c else DEFAULT_RESET, probe_length=s.head_length)
+        reset_codes=c.reset_codes if c else DEFAULT_RESET, probe_length=s.head_length,
+        options=c.options if c else None, line_length=c.line_length if c else 0,
+        program_memory=c.program_memory if c else 0,
+        limits_source=profile.source if profile else "")
     return ir.Program(setup, tuple(body))
 
 

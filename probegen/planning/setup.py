@@ -49,8 +49,9 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         position_feed=m.feeds.position, probe_feed=m.feeds.probe,
         probe_on=m.controller.probe_on, probe_off=m.controller.probe_off,
         variable_base=m.controller.variable_base, reset_codes=m.controller.reset_codes,
-        probe_length=m.probe.length,
-        **calibration_header(m),
+        probe_length=m.probe.length, options=m.controller.options,
+        line_length=m.controller.line_length, program_memory=m.controller.program_memory,
+        limits_source=m.source, **calibration_header(m),
     )
 
 

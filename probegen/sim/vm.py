@@ -239,7 +239,8 @@ HOME: Vec3 = (0.0, 0.0, 500.0)
 
 def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<program>",
              tool: int = 20, home: Vec3 = HOME,
-             work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc") -> SimResult:
+             work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
+             feed_override: float = 100.0) -> SimResult:
     """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -253,6 +254,8 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         control: the Macro B control the machine has, a key of
             ``sim.macrob.base.CONTROLS`` (``"fanuc"``, ``"haas"``; see
             :func:`program_control`).
+        feed_override: the operator's feed override, percent (Macro B only: scales G1
+            and G31 feeds while ``#3004`` does not hold it; the virtual clock).
     """
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
@@ -266,7 +269,8 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
                  11000 + tool: 0.0, 10000 + tool: 0.0}
     res = run_program(text, vm, source=source, variables=variables,
-                      settings=control_settings(control, home=home))
+                      settings=control_settings(control, home=home,
+                                                feed_override=feed_override))
     alarm = None
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"

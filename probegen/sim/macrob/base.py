@@ -96,6 +96,9 @@ class Settings:
         g_missing: Fanuc G codes the builder's control does not have: alarm 10
             (IMPROPER G-CODE) as for any unknown code (checked as written, before
             ``g_aliases``).
+        feed_override: the operator's feed override dial, percent: every G1 and G31 feed
+            is multiplied by it / 100, except while ``#3004`` bit 1 (value 2) holds
+            feed override at 100 % (the feeds run are ``RunResult.skip_feeds``).
     """
 
     dprnt_blanks: bool = False
@@ -108,11 +111,12 @@ class Settings:
     g_aliases: Mapping[float, float] = field(default_factory=dict)
     g_missing: frozenset[float] = frozenset()
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    feed_override: float = 100.0
 
 
 CONTROLS: Mapping[str, Settings] = {
     "fanuc": Settings(),
-    "haas": Settings(g_aliases={100.0: 50.1, 101.0: 51.1},
+    "haas": Settings(g_aliases={100.0: 50.1, 101.0: 51.1, 154.0: 54.1},
                      g_missing=frozenset({15.0, 16.0, 50.1, 51.1})),
 }
 """The controls the virtual machine can be (``probegen sim --control``).
@@ -121,7 +125,9 @@ CONTROLS: Mapping[str, Settings] = {
 mirror image with G100 (G101 sets it; group 0) where Fanuc writes G50.1 (G51.1), and has
 no polar-coordinate mode (G15/G16): G100 and G101 are read as G50.1 and G51.1 (which
 the virtual machine does not model: alarm 9010), and G15, G16, G50.1 and G51.1 as written
-are alarm 10, as on the machine (``dialects/haas.py`` writes the same words)."""
+are alarm 10, as on the machine (``dialects/haas.py`` writes the same words).  G154 Pn
+(P1-P99) selects the additional work offsets as Fanuc's G54.1 Pn does, with the same
+variables (#7001-, #14001-: 20 per offset)."""
 
 
 def control_settings(control: str, **changes: Any) -> Settings:

@@ -66,6 +66,9 @@ ARGUMENTS = {"A": 1, "B": 2, "C": 3, "D": 7, "E": 8, "F": 9, "H": 11, "M": 13, "
 IJK = {"I": 0, "J": 1, "K": 2}
 STORED = frozenset({3003, 3004, 3901, 3902})
 """System variables that only hold a value here (single block, feed hold, part counts)."""
+OVERRIDE_CONTROL, OVERRIDE_LOCKED = 3004, 2
+"""``#3004`` and its bit 1: feed override held at 100 % (bit 0 feed hold, bit 2 exact
+stop check are only stored)."""
 EXTENSIONS = ("", ".NC", ".nc")
 MAX_MACRO_ALARM = 4095
 """Largest n of ``#3000 = n`` (30i; the 0i takes up to 200)."""
@@ -464,6 +467,8 @@ class Interpreter:
             self.timers[1] = self.motion.clock_ms - (value or 0.0) * 3_600_000.0
         elif number in STORED:
             self.stored[number] = value
+            if number == OVERRIDE_CONTROL:
+                self.motion.override_locked = bool(round(value or 0.0) & OVERRIDE_LOCKED)
         else:
             self.read_system(number)  # alarm 115 when the variable does not exist
             raise alarm(WRITE_PROTECTED, f"#{number}")

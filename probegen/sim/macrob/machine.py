@@ -126,6 +126,8 @@ class RunResult:
         tool: the tool in the spindle at the end (the last ``T`` before an M6).
         rotation: the G68 rotation in force at the end (centre X, Y in work
             coordinates, program unit; degrees), or None.
+        skip_feeds: the feed every G31 ran at, in order, mm/min (the programmed feed
+            times ``Settings.feed_override`` unless ``#3004`` held it).
     """
 
     output: str
@@ -137,6 +139,7 @@ class RunResult:
     m_codes: tuple[int, ...] = field(default=())
     tool: int = 0
     rotation: tuple[float, float, float] | None = None
+    skip_feeds: tuple[float, ...] = ()
 
 
 def run_program(
@@ -193,6 +196,7 @@ def run_program(
         m_codes=tuple(interpreter.m_codes),
         tool=interpreter.motion.tool,
         rotation=interpreter.motion.rotation,
+        skip_feeds=tuple(interpreter.motion.skip_feeds),
     )
 
 

@@ -133,6 +133,10 @@ class Motion:
         self.tlo = 0.0
         self.h = 0
         self.feed = 0.0
+        self.override_locked = False
+        """Whether ``#3004`` bit 1 holds feed override at 100 %."""
+        self.skip_feeds: list[float] = []
+        """The feed each G31 ran at (override applied), mm/min."""
         self.spindle = 0.0
         self.next_tool = 0
         self.tool = 0
@@ -361,8 +365,11 @@ class Motion:
             feed = self.feed * self.unit
             if feed <= 0:
                 raise alarm(FEED_ZERO, "G31" if skip else "G1")
+            if not self.override_locked:
+                feed *= self.settings.feed_override / 100.0
             self.advance(start, stop, feed)
             if skip:
+                self.skip_feeds.append(feed)
                 self.skip(start, stop, feed, end)
                 return
             if stop != start:
