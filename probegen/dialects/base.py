@@ -53,6 +53,9 @@ class Dialect:
     """Whether the controller computes with variables at run time (``ir.Var``, ``Assign``)."""
     LOCAL_FRAMES: ClassVar[bool] = False
     """Whether the language can translate its frame onto a measured feature."""
+    MACRO_LIBRARY: ClassVar[bool] = False
+    """Whether the dialect has a subprogram library a compact program calls
+    (:meth:`library_files`; ``compact`` selects that form)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -61,6 +64,9 @@ class Dialect:
 
     def __init__(self) -> None:
         self.units = "mm"
+        self.compact = False
+        """Write calls to the macro library instead of inline skip moves (only where
+        ``MACRO_LIBRARY``)."""
         self.shift: ir.Vec3 = (0.0, 0.0, 0.0)
         """The head shift of the last ``ir.Rotary`` (ball centre less commanded point)."""
 
@@ -174,6 +180,15 @@ class Dialect:
         text = self.render("program.j2", **self.lower(program))
         self.check_lines(text)
         return text
+
+    def library_files(self, setup: ir.Setup) -> dict[str, str]:
+        """File name -> text of the subprograms a compact program with ``setup`` calls.
+
+        Raises:
+            UnsupportedError: the dialect has no library (``MACRO_LIBRARY`` false).
+        """
+        raise UnsupportedError(f"dialect {self.NAME!r} has no macro library; use the "
+                               "inline form")
 
     def lower(self, program: ir.Program) -> dict[str, Any]:
         """The template context for ``program``; each dialect defines it."""

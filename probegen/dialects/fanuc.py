@@ -34,6 +34,15 @@ from typing import Any, ClassVar
 from probegen import ir
 from probegen.dialects.fanuc_actions import lower_action
 from probegen.dialects.macro_b import SCRATCH, MacroB
+from probegen.dialects.macro_library import (
+    ERROR_BLOCK,
+    FAILED_MOVE,
+    MOVE,
+    POSITION_FEED,
+    PROBE_FEED,
+    TOUCH,
+    Library,
+)
 
 
 class Fanuc(MacroB):
@@ -44,6 +53,18 @@ class Fanuc(MacroB):
     LINE_LENGTH: ClassVar[int] = 80
     UNITS_CODE: ClassVar[dict[str, str]] = {"mm": "G21", "inch": "G20"}
     """The G code for each unit system."""
+    MACRO_LIBRARY: ClassVar[bool] = True
+
+    def library_for(self, s: ir.Setup) -> Library:
+        """The macro library a compact program with setup ``s`` calls."""
+        self.units = s.units
+        return Library(s.library_number, s.variable_base, self.num(self.scale(self.CHECK_SUM)))
+
+    def library_files(self, setup: ir.Setup) -> dict[str, str]:
+        files = self.library_for(setup).files()
+        for text in files.values():
+            self.check_lines(text)
+        return files
 
     def check_lines(self, text: str) -> None:
         """Line length and characters, and the length of every alarm message."""
@@ -58,13 +79,56 @@ class Fanuc(MacroB):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
+        self.lib = self.library_for(s)
         blocks = [self.block(node) for node in nodes]
+        if self.compact:
+            blocks = self.error_blocks(blocks)
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
             "ball": self.length(s.ball_diameter),
             "clearance": self.length(s.clearance_z),
             "first_var": self.base, "last_var": self.base + SCRATCH + 3,
+            "library": self.library_header(s) if self.compact else None,
         }
+
+    # -- the compact form: G65 calls to the macro library ------------------------------
+    def library_header(self, s: ir.Setup) -> dict[str, Any]:
+        """The library's numbers and the feeds the main program sets for it."""
+        return {"first": self.lib.number(MOVE), "last": self.lib.number(TOUCH),
+                "feeds": [f"{self.lib.common(PROBE_FEED)}={self.feed(s.probe_feed)}",
+                          f"{self.lib.common(POSITION_FEED)}={self.feed(s.position_feed)}"]}
+
+    def call(self, offset: int, point: ir.Point, index: int) -> dict[str, Any]:
+        """``G65 P.. X.. Y.. Z.. I<index>.`` of library subprogram ``offset``."""
+        xyz = [self.addr(c) for c in self.commanded(point)]
+        return {"p": self.lib.number(offset), "xyz": xyz, "i": f"{index}."}
+
+    def error_blocks(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """Each run of calls serving one feature, preceded by the number of its error
+        block (``#base+92``) and followed by that block (skipped by a GOTO): where a
+        library macro returns when its move fails (``dialects/macro_library.py``)."""
+        out: list[dict[str, Any]] = []
+        open_feature = ""
+        pending: dict[str, Any] | None = None
+        for b in blocks:
+            if b.get("call") and b["feature"] != open_feature:
+                if pending:
+                    out.append(pending)
+                open_feature = b["feature"]
+                pending = self.error_block(open_feature)
+                out.append({"kind": "assign", "var": self.lib.common(ERROR_BLOCK),
+                            "value": str(pending["notouch"])})
+            out.append(b)
+        if pending:
+            out.append(pending)
+        return out
+
+    def error_block(self, feature: str) -> dict[str, Any]:
+        notouch = self.next_label()
+        self.next_label()  # the collision block: the library returns to #base+92 + 1
+        return {"kind": "errors", "feature": feature, "notouch": notouch,
+                "collision": notouch + 1, "skip": self.next_label(),
+                "index": self.lib.common(FAILED_MOVE)}
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One IR node as the values its template macro prints."""
@@ -118,6 +182,9 @@ class Fanuc(MacroB):
         if node.mode is ir.MoveMode.RETRACT:
             return {"kind": "retract", "xyz": xyz, "f": self.feed(self.setup.position_feed)}
         self.moves[feature] = self.moves.get(feature, 0) + 1
+        if self.compact:
+            return {"kind": "call_move", "call": True, "feature": feature,
+                    **self.call(MOVE, node.target, self.moves[feature])}
         return {"kind": "protected", "set": self.targets(node.target),
                 "feature": feature, "index": self.moves[feature],
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.position_feed),
@@ -129,6 +196,11 @@ class Fanuc(MacroB):
         end = tuple(c + k * n for c, n in zip(node.contact, node.normal, strict=True))
         stores = [f"{self.var(name)}=#{5061 + axis}" for axis, name in enumerate(node.store)
                   if name is not None]
+        if self.compact:
+            return {"kind": "call_touch", "call": True, "tag": node.role.value,
+                    "feature": node.feature, "index": node.index, "stores": stores,
+                    "fmt": self.DPRNT_FORMAT[self.units],
+                    **self.call(TOUCH, end, node.index)}  # type: ignore[arg-type]
         return {"kind": "touch", "set": self.targets(end),  # type: ignore[arg-type]
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.probe_feed),
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label(),

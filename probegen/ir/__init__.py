@@ -84,6 +84,8 @@ class Setup:
         calibration: the probe calibration's header comment lines (upper case, no
             parentheses) when the program was compiled with one, else empty.
         calibration_id: its fingerprint (printed in the ``PGCAL`` line), or "".
+        library_number: O number of the first subprogram of the macro library a compact
+            Macro B program calls (``[controller] library_number``).
     """
 
     program_number: int
@@ -105,6 +107,7 @@ class Setup:
     identity: str = ""
     calibration: tuple[str, ...] = ()
     calibration_id: str = ""
+    library_number: int = 8000
 
 
 @dataclass(frozen=True, slots=True)

@@ -71,6 +71,9 @@ class Controller:
             minute, rotation off...); drop a code the control lacks the option for.
         program_numbers: the O numbers probegen may give a program, ``(first, last)``
             (``[controller] program_numbers``; default :func:`default_program_numbers`).
+        library_number: the O number of the first subprogram of probegen's macro
+            library (``[controller] library_number``, default 8000; the library takes
+            the numbers from it up, each checked against ``program_numbers``).
     """
 
     line_length: int
@@ -80,6 +83,7 @@ class Controller:
     tool_change: bool
     reset_codes: tuple[str, ...]
     program_numbers: tuple[int, int] = (1, 8999)
+    library_number: int = 8000
 
 
 DEFAULT_RESET = ("G17", "G40", "G49", "G80", "G94", "G69")
@@ -224,6 +228,8 @@ def _controller(t: Table, dialect: str) -> Controller:
         tool_change=t.get_bool("tool_change", True),
         reset_codes=t.get_str_list("reset_codes", DEFAULT_RESET),
         program_numbers=_program_numbers(t, dialect),
+        library_number=t.get_int("library_number", 8000, minimum=1,
+                                 maximum=PROGRAM_NUMBER_MAX) or 8000,
     )
     t.done()
     return c

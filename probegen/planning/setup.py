@@ -49,7 +49,7 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         position_feed=m.feeds.position, probe_feed=m.feeds.probe,
         probe_on=m.controller.probe_on, probe_off=m.controller.probe_off,
         variable_base=m.controller.variable_base, reset_codes=m.controller.reset_codes,
-        probe_length=m.probe.length,
+        probe_length=m.probe.length, library_number=m.controller.library_number,
         **calibration_header(m),
     )
 

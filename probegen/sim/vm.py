@@ -239,7 +239,8 @@ HOME: Vec3 = (0.0, 0.0, 500.0)
 
 def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<program>",
              tool: int = 20, home: Vec3 = HOME,
-             work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc") -> SimResult:
+             work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
+             program_dir: Path | None = None) -> SimResult:
     """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -253,6 +254,9 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
         control: the Macro B control the machine has, a key of
             ``sim.macrob.base.CONTROLS`` (``"fanuc"``, ``"haas"``; see
             :func:`program_control`).
+        program_dir: where called subprograms ``O<n>.nc`` are looked for (a compact
+            program's macro library); a subprogram found neither in the text nor there
+            stops the run with alarm 76 naming it.
     """
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
@@ -265,7 +269,7 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
 
     variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
                  11000 + tool: 0.0, 10000 + tool: 0.0}
-    res = run_program(text, vm, source=source, variables=variables,
+    res = run_program(text, vm, source=source, variables=variables, program_dir=program_dir,
                       settings=control_settings(control, home=home))
     alarm = None
     if res.alarm is not None:
