@@ -181,8 +181,9 @@ class Dialect:
         self.check_lines(text)
         return text
 
-    def library_files(self, setup: ir.Setup) -> dict[str, str]:
-        """File name -> text of the subprograms a compact program with ``setup`` calls.
+    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+        """File name -> text of the macro library's subprograms, numbered from ``first``,
+        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``).
 
         Raises:
             UnsupportedError: the dialect has no library (``MACRO_LIBRARY`` false).

@@ -55,13 +55,14 @@ class Fanuc(MacroB):
     """The G code for each unit system."""
     MACRO_LIBRARY: ClassVar[bool] = True
 
-    def library_for(self, s: ir.Setup) -> Library:
-        """The macro library a compact program with setup ``s`` calls."""
-        self.units = s.units
-        return Library(s.library_number, s.variable_base, self.num(self.scale(self.CHECK_SUM)))
+    def library_for(self, first: int, base: int, units: str) -> Library:
+        """The macro library from O``first`` for programs with variable base ``base`` in
+        ``units``."""
+        self.units = units
+        return Library(first, base, self.num(self.scale(self.CHECK_SUM)))
 
-    def library_files(self, setup: ir.Setup) -> dict[str, str]:
-        files = self.library_for(setup).files()
+    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+        files = self.library_for(first, base, units).files()
         for text in files.values():
             self.check_lines(text)
         return files
@@ -79,7 +80,7 @@ class Fanuc(MacroB):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
-        self.lib = self.library_for(s)
+        self.lib = self.library_for(s.library_number, s.variable_base, s.units)
         blocks = [self.block(node) for node in nodes]
         if self.compact:
             blocks = self.error_blocks(blocks)
