@@ -30,7 +30,8 @@ from conftest import REPO, sample_script
 
 from probegen import cad
 from probegen.dialects import get_dialect
-from probegen.evaluate.ingest import ingest, to_json
+from probegen.evaluate.ingest import ingest
+from probegen.evaluate.outputs import to_json
 from probegen.machine.probe_model import Lobing, ProbeModel
 from probegen.planning import plan_program
 from probegen.sim.contact import PlacedPart
