@@ -78,7 +78,7 @@ def bore_block(tmp_path_factory: pytest.TempPathFactory) -> cad.Model:
 def test_library_matches_golden(dialect: str) -> None:
     """The library as whole files; Haas runs the Fanuc text, so it is the same one."""
     files = get_dialect(dialect).library_files(8000, 100, "mm")
-    assert list(files) == ["O8000.nc", "O8001.nc"]
+    assert list(files) == ["O8000.nc", "O8001.nc", "O8002.nc"]
     for name, text in files.items():
         assert_golden(GOLDEN / name, text)
 
@@ -86,7 +86,7 @@ def test_library_matches_golden(dialect: str) -> None:
 def test_library_follows_the_profile() -> None:
     """Numbers, variable base and units move the text; the program number is its name."""
     files = get_dialect("fanuc").library_files(7100, 600, "inch")
-    assert list(files) == ["O7100.nc", "O7101.nc"]
+    assert list(files) == ["O7100.nc", "O7101.nc", "O7102.nc"]
     text = files["O7101.nc"]
     assert "O7101(PROBEGEN TOUCH)" in text and "F#690" in text and "M99 P#692" in text
     assert "GE0.00020" in text  # the check sum in inch
@@ -98,8 +98,9 @@ def test_compact_program_matches_golden() -> None:
     inline, compact = forms(SPHERE, "fanuc")
     assert_golden(GOLDEN / "sphere_test.compact.nc", compact)
     # one call per inline touch (alarm 3001) and per protected move (alarm 3002)
-    assert compact.count("G65P8001") == inline.count("#3000=1(") > 0
-    assert compact.count("G65P8000") == inline.count("#3000=2(") > 0
+    points = compact.count("G65P8002")
+    assert compact.count("G65P8001") + points == inline.count("#3000=1(") > points > 0
+    assert compact.count("G65P8000") + points == inline.count("#3000=2(") > 0
     assert "G31" not in compact and len(compact) < len(inline) / 2
 
 
@@ -109,7 +110,7 @@ def test_compact_measures_as_inline(spec_path: Path, dialect: str, bore_block: c
                                     tmp_path: Path) -> None:
     spec = load_spec(REPO / spec_path)
     inline_text, compact_text = forms(REPO / spec_path, dialect)
-    assert "G65P8001" in compact_text
+    assert "G65P800" in compact_text and "G31" not in compact_text
     part = placed_part(spec, bore_block)
     ball = spec.machine.probe.ball_radius
     inline = run(inline_text, part, ball, dialect, None)
@@ -145,7 +146,7 @@ def test_missing_library_is_named(tmp_path: Path) -> None:
     _, compact_text = forms(SPHERE, "fanuc")
     spec = load_spec(SPHERE)
     res = run(compact_text, sphere_part(0.0), spec.machine.probe.ball_radius, "fanuc", tmp_path)
-    assert res.alarm is not None and res.alarm.startswith("76 PROGRAM NOT FOUND (O8000)")
+    assert res.alarm is not None and res.alarm.startswith("76 PROGRAM NOT FOUND (O8002)")
     assert res.touches == 0
 
 
@@ -155,7 +156,8 @@ def test_cli_compact_compile_and_sim(in_repo: Path, tmp_path: Path,
     through --library; probegen macros writes the same files."""
     out = tmp_path / "c"
     assert main(["compile", str(SPHERE), "--compact", "-d", "fanuc", "-o", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["O8000.nc", "O8001.nc", "sphere_test.nc"]
+    assert sorted(p.name for p in out.iterdir()) == ["O8000.nc", "O8001.nc", "O8002.nc",
+                                                        "sphere_test.nc"]
     assert (out / "O8001.nc").read_text() == (GOLDEN / "O8001.nc").read_text()
     log = tmp_path / "run.log"
     assert main(["sim", str(out / "sphere_test.nc"), "--spec", str(SPHERE),
@@ -166,7 +168,7 @@ def test_cli_compact_compile_and_sim(in_repo: Path, tmp_path: Path,
     capsys.readouterr()
     assert main(["sim", str(alone / "p.nc"), "--spec", str(SPHERE),
                  "-o", str(tmp_path / "x.log")]) == ExitCode.SIM_ALARM
-    assert "PROGRAM NOT FOUND (O8000)" in capsys.readouterr().err
+    assert "PROGRAM NOT FOUND (O8002)" in capsys.readouterr().err
     assert main(["sim", str(alone / "p.nc"), "--spec", str(SPHERE), "--library", str(out),
                  "-o", str(tmp_path / "y.log")]) == ExitCode.OK
     assert (tmp_path / "y.log").read_text() == log.read_text()
@@ -193,4 +195,5 @@ def test_library_numbers_are_checked(in_repo: Path, tmp_path: Path,
     good = tmp_path / "g.toml"
     good.write_text(profile.replace("[controller]", "[controller]\nlibrary_number = 7000"))
     assert main(["macros", "-o", str(tmp_path / "o"), "--machine", str(good)]) == ExitCode.OK
-    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["O7000.nc", "O7001.nc"]
+    names = sorted(p.name for p in (tmp_path / "o").iterdir())
+    assert names == ["O7000.nc", "O7001.nc", "O7002.nc"]

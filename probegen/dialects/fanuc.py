@@ -29,6 +29,7 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
 
 from __future__ import annotations
 
+import re
 from typing import Any, ClassVar
 
 from probegen import ir
@@ -38,6 +39,7 @@ from probegen.dialects.macro_library import (
     ERROR_BLOCK,
     FAILED_MOVE,
     MOVE,
+    POINT,
     POSITION_FEED,
     PROBE_FEED,
     TOUCH,
@@ -83,7 +85,7 @@ class Fanuc(MacroB):
         self.lib = self.library_for(s.library_number, s.variable_base, s.units)
         blocks = [self.block(node) for node in nodes]
         if self.compact:
-            blocks = self.error_blocks(blocks)
+            blocks = self.error_blocks(self.points(blocks))
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
             "ball": self.length(s.ball_diameter),
@@ -95,14 +97,40 @@ class Fanuc(MacroB):
     # -- the compact form: G65 calls to the macro library ------------------------------
     def library_header(self, s: ir.Setup) -> dict[str, Any]:
         """The library's numbers and the feeds the main program sets for it."""
-        return {"first": self.lib.number(MOVE), "last": self.lib.number(TOUCH),
+        return {"first": self.lib.number(MOVE), "last": self.lib.number(POINT),
                 "feeds": [f"{self.lib.common(PROBE_FEED)}={self.feed(s.probe_feed)}",
                           f"{self.lib.common(POSITION_FEED)}={self.feed(s.position_feed)}"]}
 
     def call(self, offset: int, point: ir.Point, index: int) -> dict[str, Any]:
         """``G65 P.. X.. Y.. Z.. I<index>.`` of library subprogram ``offset``."""
-        xyz = [self.addr(c) for c in self.commanded(point)]
-        return {"p": self.lib.number(offset), "xyz": xyz, "i": f"{index}."}
+        xyz = [short(self.addr(c)) for c in self.commanded(point)]
+        call = {"p": self.lib.number(offset), "xyz": xyz, "i": f"I{index}."}
+        return {**call, "line": call_line(call)}
+
+    def points(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """Each protected move, touch and retract to the move's target, one call to the
+        library's point macro (the skip position it leaves in ``#5061``-``#5063`` is
+        printed after it, as the inline program prints it before the retract)."""
+        out: list[dict[str, Any]] = []
+        k = 0
+        while k < len(blocks):
+            move, touch, back = (blocks[k:k + 3] + [{}, {}, {}])[:3]
+            if (move.get("kind") == "call_move" and touch.get("kind") == "call_touch"
+                    and back.get("kind") == "retract"
+                    and [short(v) for v in back["xyz"]] == move["xyz"]
+                    and move["feature"] == touch["feature"]
+                    and not stored_in(touch["stores"], back["xyz"])):
+                u, v, w = touch["xyz"]
+                words = f"U{u}V{v}W{w}{touch['i']}J{move['i'][1:]}"
+                call = {**touch, "p": self.lib.number(POINT), "xyz": move["xyz"], "i": words}
+                call["line"] = call_line(call)
+                if len(call["line"]) <= self.LINE_LENGTH:  # else the three calls
+                    out.append(call)
+                    k += 3
+                    continue
+            out.append(move)
+            k += 1
+        return out
 
     def error_blocks(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
         """Each run of calls serving one feature, preceded by the number of its error
@@ -215,6 +243,26 @@ class Fanuc(MacroB):
             value = self.expr(node.a + node.offset if isinstance(node.a, ir.Var)
                               else node.a + node.offset)
         return {"kind": "assign", "var": self.var(node.name), "value": value}
+
+
+def call_line(b: dict[str, Any]) -> str:
+    """The ``G65`` block of a call: program ``p``, X Y Z ``xyz`` and the words ``i``."""
+    x, y, z = b["xyz"]
+    return f"G65P{b['p']}X{x}Y{y}Z{z}{b['i']}"
+
+
+def stored_in(stores: list[str], xyz: list[str]) -> bool:
+    """Whether a touch's stores (``#100=#5063``) write a variable a point names (the
+    inline retract would read the new value, a call its value before the touch)."""
+    written = {store.split("=")[0] for store in stores}
+    return any(re.search(rf"{re.escape(var)}(?!\d)", " ".join(xyz)) for var in written)
+
+
+def short(value: str) -> str:
+    """A number without its trailing zeros (``21.0000`` -> ``21.``, ``0.5000`` ->
+    ``0.5``; the decimal point stays, so no control reads it in least input increments);
+    a variable or an expression unchanged."""
+    return value.rstrip("0") if "." in value and "#" not in value else value
 
 
 def feature_owners(nodes: list[ir.Node]) -> dict[int, str]:

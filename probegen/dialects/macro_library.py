@@ -30,9 +30,13 @@ from dataclasses import dataclass
 
 from probegen.dialects.macro_b import SCRATCH
 
-MOVE, TOUCH = 0, 1
-"""Offsets of the protected move and the touch from the library's first number."""
-NAMES = {MOVE: "PROTECTED MOVE", TOUCH: "TOUCH"}
+MOVE, TOUCH, POINT = 0, 1, 2
+"""Offsets of the protected move, the touch and the point from the library's first
+number."""
+NAMES = {MOVE: "PROTECTED MOVE", TOUCH: "TOUCH", POINT: "POINT"}
+USAGE = {MOVE: "X Y Z TARGET, I MOVE NUMBER",
+         TOUCH: "X Y Z END POINT, I POINT NUMBER",
+         POINT: "X Y Z APPROACH, U V W END, I POINT, J MOVE"}
 PROBE_FEED, POSITION_FEED, ERROR_BLOCK, FAILED_MOVE = range(SCRATCH, SCRATCH + 4)
 """Offsets from the variable base of the commons a compact program shares with the
 library."""
@@ -67,22 +71,29 @@ class Library:
 
     def text(self, offset: int) -> str:
         """The text of subprogram ``offset``, lines ending in ``\\n``."""
-        moved = offset == MOVE
-        feed = self.common(POSITION_FEED if moved else PROBE_FEED)
-        test = "LT" if moved else "GE"
-        back = f"[{self.common(ERROR_BLOCK)}+1]" if moved else self.common(ERROR_BLOCK)
-        what = "MOVE" if moved else "POINT"
-        lines = [
-            "%",
-            f"O{self.number(offset):04d}(PROBEGEN {NAMES[offset]})",
-            f"(X Y Z {'TARGET' if moved else 'END POINT'}, I {what} NUMBER)",
-            f"G31 X#24 Y#25 Z#26 F{feed}",
-            "#10=ABS[#5061-#24]+ABS[#5062-#25]+ABS[#5063-#26]",
-            f"IF[#10{test}{self.limit}]GOTO1",
-            f"{self.common(FAILED_MOVE)}=#4",
-            f"M99 P{back}",
-            "N1",
-            "M99",
-            "%",
-        ]
+        if offset == MOVE:
+            body = self.skip("#24 #25 #26", moved=True, number="#4", label=1)
+        elif offset == TOUCH:
+            body = self.skip("#24 #25 #26", moved=False, number="#4", label=1)
+        else:
+            body = [*self.skip("#24 #25 #26", moved=True, number="#5", label=1),
+                    *self.skip("#21 #22 #23", moved=False, number="#4", label=2),
+                    f"G1 X#24 Y#25 Z#26 F{self.common(POSITION_FEED)}"]
+        lines = ["%", f"O{self.number(offset):04d}(PROBEGEN {NAMES[offset]})",
+                 f"({USAGE[offset]})", *body, "M99", "%"]
         return "\n".join(lines) + "\n"
+
+    def skip(self, xyz: str, *, moved: bool, number: str, label: int) -> list[str]:
+        """A G31 move to the point in locals ``xyz`` and its check: a protected move
+        (``moved``) fails when the skip fired before the end point, a touch when it did
+        not; a failure keeps move ``number`` in ``#base+93`` and returns to the caller's
+        error block."""
+        x, y, z = xyz.split()
+        feed = self.common(POSITION_FEED if moved else PROBE_FEED)
+        back = f"[{self.common(ERROR_BLOCK)}+1]" if moved else self.common(ERROR_BLOCK)
+        return [f"G31 X{x} Y{y} Z{z} F{feed}",
+                f"#10=ABS[#5061-{x}]+ABS[#5062-{y}]+ABS[#5063-{z}]",
+                f"IF[#10{'LT' if moved else 'GE'}{self.limit}]GOTO{label}",
+                f"{self.common(FAILED_MOVE)}={number}",
+                f"M99 P{back}",
+                f"N{label}"]
