@@ -52,6 +52,7 @@ def programs(source: Path) -> tuple[object, object, object]:
 def measure(source: Path) -> str:
     """One table row for ``source`` (a spec or a STEP model)."""
     from probegen.dialects import get_dialect
+    from probegen.errors import ProbegenError
     from probegen.machine.probe_model import ProbeModel
     from probegen.sim.vm import VirtualMachine, run_text
 
@@ -63,6 +64,8 @@ def measure(source: Path) -> str:
     setup = program.setup  # type: ignore[attr-defined]
     library = d.library_files(setup.library_number, setup.variable_base, setup.units)
     touches = inline.count("#3000=1(")
+    if not touches:
+        raise ProbegenError("no touches")
     ball = spec.machine.probe.ball_radius  # type: ignore[attr-defined]
     with tempfile.TemporaryDirectory() as tmp:
         for name, text in library.items():
@@ -83,8 +86,13 @@ def main(argv: list[str]) -> None:
           "compact bytes | compact lines | bytes/touch | lines/touch | library bytes | "
           "VM logs |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    from probegen.errors import ProbegenError
+
     for source in sources:
-        print(measure(source), flush=True)
+        try:
+            print(measure(source), flush=True)
+        except ProbegenError as exc:  # a model with no plannable revolved feature
+            print(f"| {source.stem[:32]} | not planned: {str(exc)[:60]} |", flush=True)
 
 
 if __name__ == "__main__":
