@@ -178,6 +178,9 @@ def test_cli_compact_compile_and_sim(in_repo: Path, tmp_path: Path,
     assert main(["macros", "-d", "haas", "-o", str(tmp_path / "m")]) == ExitCode.OK
     assert (tmp_path / "m" / "O8000.nc").read_text() == (GOLDEN / "O8000.nc").read_text()
     assert main(["macros", "-d", "dmis", "-o", str(tmp_path / "d")]) == ExitCode.UNSUPPORTED
+    capsys.readouterr()
+    assert main(["compile", str(SPHERE), "--compact", "-o", "-"]) == ExitCode.ERROR
+    assert "macro library" in capsys.readouterr().err
 
 
 def test_library_numbers_are_checked(in_repo: Path, tmp_path: Path,

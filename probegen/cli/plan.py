@@ -26,6 +26,10 @@ def _compile(args: argparse.Namespace) -> int:
     spec = with_calibration(load_spec(args.spec), args.calibration)
     spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
     names = args.dialect or [spec.dialect]
+    if args.compact and args.output == "-":
+        raise ProbegenError("compile --compact -o -: expected a folder or file for -o, found "
+                            "stdout; the program calls the macro library, which is written "
+                            "beside it (or write it with probegen macros -o DIR)")
     part: Part | None = None
     outputs = []
     for name in names:
