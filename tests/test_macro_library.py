@@ -172,6 +172,11 @@ def test_cli_compact_compile_and_sim(in_repo: Path, tmp_path: Path,
     assert main(["sim", str(alone / "p.nc"), "--spec", str(SPHERE), "--library", str(out),
                  "-o", str(tmp_path / "y.log")]) == ExitCode.OK
     assert (tmp_path / "y.log").read_text() == log.read_text()
+    both = tmp_path / "b"
+    assert main(["compile", str(SPHERE), "--compact", "-d", "dmis", "-d", "haas",
+                 "-o", str(both)]) == 0
+    assert sorted(p.name for p in both.iterdir()) == ["O8000.nc", "O8001.nc", "O8002.nc",
+                                                      "sphere_test.dmi", "sphere_test.haas.nc"]
     inline = tmp_path / "i"
     assert main(["compile", str(SPHERE), "--inline", "-d", "fanuc", "-o", str(inline)]) == 0
     assert [p.name for p in inline.iterdir()] == ["sphere_test.nc"]

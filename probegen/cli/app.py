@@ -193,7 +193,8 @@ def build_parser() -> argparse.ArgumentParser:
     form = c.add_mutually_exclusive_group()
     form.add_argument("--compact", action="store_true",
                       help="Fanuc/Haas: call probegen's macro library (G65) for every skip "
-                           "move and write the library beside the program (O8000.nc ...)")
+                           "move and write the library beside the program (O8000.nc ...); "
+                           "the other dialects are written inline")
     form.add_argument("--inline", dest="compact", action="store_false",
                       help="every skip move spelt out in the program (the default)")
     c.set_defaults(func=_compile)

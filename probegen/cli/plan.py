@@ -39,9 +39,9 @@ def _compile(args: argparse.Namespace) -> int:
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
-        dialect.compact = args.compact
+        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
         text = dialect.generate(planned.program)
-        library = checked_library(dialect, spec.machine) if args.compact else {}
+        library = checked_library(dialect, spec.machine) if dialect.compact else {}
         if args.output == "-":
             sys.stdout.write(text)
             continue
