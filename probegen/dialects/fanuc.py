@@ -83,6 +83,7 @@ class Fanuc(MacroB):
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
         self.lib = self.library_for(s.library_number, s.variable_base, s.units)
+        self.tail: list[dict[str, Any]] = []
         blocks = [self.block(node) for node in nodes]
         if self.compact:
             blocks = self.error_blocks(self.points(blocks))
@@ -91,7 +92,7 @@ class Fanuc(MacroB):
             "ball": self.length(s.ball_diameter),
             "clearance": self.length(s.clearance_z),
             "first_var": self.base, "last_var": self.base + SCRATCH + 3,
-            "library": self.library_header(s) if self.compact else None,
+            "library": self.library_header(s) if self.compact else None, "tail": self.tail,
         }
 
     # -- the compact form: G65 calls to the macro library ------------------------------
@@ -134,29 +135,25 @@ class Fanuc(MacroB):
 
     def error_blocks(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
         """Each run of calls serving one feature, preceded by the number of its error
-        block (``#base+92``) and followed by that block (skipped by a GOTO): where a
-        library macro returns when its move fails (``dialects/macro_library.py``)."""
+        block (``#base+92``): where a library macro returns when its move fails
+        (``dialects/macro_library.py``).  The error blocks themselves go after ``M30``
+        (``self.tail``), out of the program's flow."""
         out: list[dict[str, Any]] = []
         open_feature = ""
-        pending: dict[str, Any] | None = None
         for b in blocks:
             if b.get("call") and b["feature"] != open_feature:
-                if pending:
-                    out.append(pending)
                 open_feature = b["feature"]
-                pending = self.error_block(open_feature)
+                self.tail.append(self.error_block(open_feature))
                 out.append({"kind": "assign", "var": self.lib.common(ERROR_BLOCK),
-                            "value": str(pending["notouch"])})
+                            "value": str(self.tail[-1]["notouch"])})
             out.append(b)
-        if pending:
-            out.append(pending)
         return out
 
     def error_block(self, feature: str) -> dict[str, Any]:
         notouch = self.next_label()
         self.next_label()  # the collision block: the library returns to #base+92 + 1
         return {"kind": "errors", "feature": feature, "notouch": notouch,
-                "collision": notouch + 1, "skip": self.next_label(),
+                "collision": notouch + 1,
                 "index": self.lib.common(FAILED_MOVE)}
 
     def block(self, node: ir.Node) -> dict[str, Any]:
