@@ -25,7 +25,7 @@ from typing import Any, NoReturn
 
 from probegen import __version__
 from probegen.cli.options import dialect_help, finite, non_negative, positive
-from probegen.cli.plan import _compile, _features, _plan, _sphere_points, _target
+from probegen.cli.plan import _compile, _features, _macros, _plan, _sphere_points, _target
 from probegen.cli.probe import add_probe_options, probe_from_args
 from probegen.cli.results import (
     _PARITY,
@@ -91,7 +91,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
                           control=args.control or program_control(args.program),
-                          feed_override=args.feed_override)
+                          feed_override=args.feed_override,
+                          program_dir=Path(args.library or Path(args.program).parent))
     data = result.output.encode("ascii", errors="replace")
     if isinstance(link, PtyLink):
         print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
@@ -105,6 +106,11 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         print(f"  control: {line}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
+        if result.alarm.startswith("76 "):
+            print(f"  a called subprogram is neither in the program nor in "
+                  f"{args.library or Path(args.program).parent}/ (a compact program's macro "
+                  f"library: probegen macros -d DIALECT -o DIR, then sim --library DIR)",
+                  file=sys.stderr)
         return ExitCode.SIM_ALARM
     return ExitCode.OK
 
@@ -210,7 +216,22 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--calibration", metavar="FILE",
                    help="probe calibration (from ingest --write-calibration) baked into "
                         "the in-process actions; overrides the spec's [machine] calibration")
+    form = c.add_mutually_exclusive_group()
+    form.add_argument("--compact", action="store_true",
+                      help="Fanuc/Haas: call probegen's macro library (G65) for every skip "
+                           "move and write the library beside the program (O8000.nc ...); "
+                           "the other dialects are written inline")
+    form.add_argument("--inline", dest="compact", action="store_false",
+                      help="every skip move spelt out in the program (the default)")
     c.set_defaults(func=_compile)
+
+    mc = sub.add_parser("macros", help="write probegen's Macro B subprogram library (the "
+                                       "programs a compile --compact program calls)")
+    mc.add_argument("-d", "--dialect", default="fanuc", help="fanuc or haas (default fanuc)")
+    mc.add_argument("-o", "--output", default="out", help="output folder (default: out/)")
+    mc.add_argument("--machine", help="machine profile (TOML): units, variable base and "
+                                      "[controller] library_number (default: 8000, mm, #100)")
+    mc.set_defaults(func=_macros)
 
     f = sub.add_parser("features", help="list the faces of a STEP model")
     f.add_argument("model", help="STEP file")
@@ -290,6 +311,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--feed-override", type=positive, default=100.0, metavar="PCT",
                     help="the operator's feed override, percent (Macro B: G1 and G31 feeds, "
                          "except while #3004 holds it at 100)")
+    sm.add_argument("--library", metavar="DIR",
+                    help="where called subprograms O<n>.nc are (a compact program's macro "
+                         "library; default: the program's folder)")
     sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",

@@ -27,6 +27,10 @@ def _compile(args: argparse.Namespace) -> int:
     spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
     check_options(spec)
     names = args.dialect or [spec.dialect]
+    if args.compact and args.output == "-":
+        raise ProbegenError("compile --compact -o -: expected a folder or file for -o, found "
+                            "stdout; the program calls the macro library, which is written "
+                            "beside it (or write it with probegen macros -o DIR)")
     part: Part | None = None
     outputs = []
     for name in names:
@@ -36,12 +40,15 @@ def _compile(args: argparse.Namespace) -> int:
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
+        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
         text = dialect.generate(planned.program)
+        library = checked_library(dialect, spec.machine) if dialect.compact else {}
         if args.output == "-":
             sys.stdout.write(text)
             continue
         target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
         write_file(target, text, f"the {name} program", encoding="ascii")
+        write_library(target.parent, library)
         outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
     from probegen.machine.calibration import UNCALIBRATED
 
@@ -60,6 +67,44 @@ def _compile(args: argparse.Namespace) -> int:
         _print_freeform(planned, "  ")
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
+    return ExitCode.OK
+
+
+def checked_library(dialect: Any, machine: Any) -> dict[str, str]:
+    """The macro library files ``dialect`` writes for ``machine`` (a profile), each
+    program number checked against its ``[controller] program_numbers``.
+
+    Raises:
+        UnsupportedError: the dialect has no library.
+        SpecError: a number is outside the machine's range.
+    """
+    c = machine.controller
+    files: dict[str, str] = dialect.library_files(c.library_number, c.variable_base,
+                                                  machine.units)
+    for number in range(c.library_number, c.library_number + len(files)):
+        machine.check_program_number(
+            number, f"{machine.source}: controller.library_number (O{number})")
+    return files
+
+
+def write_library(folder: Path, files: dict[str, str]) -> None:
+    """Write the macro library's files into ``folder`` and say so."""
+    for name, text in files.items():
+        write_file(folder / name, text, "a macro library subprogram", encoding="ascii")
+    if files:
+        print(f"wrote the macro library {', '.join(files)} in {folder}")
+
+
+def _macros(args: argparse.Namespace) -> int:
+    from probegen.dialects import get_dialect
+    from probegen.machine.profile import load_profile
+
+    dialect = get_dialect(args.dialect)
+    if args.machine:
+        files = checked_library(dialect, load_profile(args.machine))
+    else:
+        files = dialect.library_files(8000, 100, "mm")
+    write_library(Path(args.output), files)
     return ExitCode.OK
 
 

@@ -66,6 +66,9 @@ class Dialect:
     EXTENDED_OFFSET: ClassVar[str] = ""
     """The code selecting an extended work offset ``<code> Pn`` (``G54.1`` on Fanuc,
     ``G154`` on Haas), or "" where the control has none."""
+    MACRO_LIBRARY: ClassVar[bool] = False
+    """Whether the dialect has a subprogram library a compact program calls
+    (:meth:`library_files`; ``compact`` selects that form)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -74,6 +77,9 @@ class Dialect:
 
     def __init__(self) -> None:
         self.units = "mm"
+        self.compact = False
+        """Write calls to the macro library instead of inline skip moves (only where
+        ``MACRO_LIBRARY``)."""
         self.shift: ir.Vec3 = (0.0, 0.0, 0.0)
         """The head shift of the last ``ir.Rotary`` (ball centre less commanded point)."""
         self.limits: ir.Setup | None = None
@@ -221,6 +227,16 @@ class Dialect:
         self.check_lines(text)
         self.check_size(text)
         return text
+
+    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+        """File name -> text of the macro library's subprograms, numbered from ``first``,
+        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``).
+
+        Raises:
+            UnsupportedError: the dialect has no library (``MACRO_LIBRARY`` false).
+        """
+        raise UnsupportedError(f"dialect {self.NAME!r} has no macro library; use the "
+                               "inline form")
 
     def lower(self, program: ir.Program) -> dict[str, Any]:
         """The template context for ``program``; each dialect defines it."""

@@ -34,11 +34,22 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
 
 from __future__ import annotations
 
+import re
 from typing import Any, ClassVar
 
 from probegen import ir
 from probegen.dialects.fanuc_actions import lower_action, offset_words
 from probegen.dialects.macro_b import SCRATCH, MacroB
+from probegen.dialects.macro_library import (
+    ERROR_BLOCK,
+    FAILED_MOVE,
+    MOVE,
+    POINT,
+    POSITION_FEED,
+    PROBE_FEED,
+    TOUCH,
+    Library,
+)
 
 
 class Fanuc(MacroB):
@@ -55,6 +66,19 @@ class Fanuc(MacroB):
     0 after it: ``#3003`` bit 0 suppresses single block stops, ``#3004`` bit 1 (2) holds
     feed override at 100 % (bit 0, feed hold, and bit 2, exact stop, stay enabled: the
     operator can still stop the machine)."""
+    MACRO_LIBRARY: ClassVar[bool] = True
+
+    def library_for(self, first: int, base: int, units: str) -> Library:
+        """The macro library from O``first`` for programs with variable base ``base`` in
+        ``units``."""
+        self.units = units
+        return Library(first, base, self.num(self.scale(self.CHECK_SUM)))
+
+    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+        files = self.library_for(first, base, units).files()
+        for text in files.values():
+            self.check_lines(text)
+        return files
 
     def check_lines(self, text: str) -> None:
         """Line length and characters, and the length of every alarm message."""
@@ -69,7 +93,11 @@ class Fanuc(MacroB):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
+        self.lib = self.library_for(s.library_number, s.variable_base, s.units)
+        self.tail: list[dict[str, Any]] = []
         blocks = [self.block(node) for node in nodes]
+        if self.compact:
+            blocks = self.error_blocks(self.points(blocks))
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
             "reset_codes": self.reset_block(s),
@@ -77,7 +105,69 @@ class Fanuc(MacroB):
             "clearance": self.length(s.clearance_z),
             "first_var": self.base, "last_var": self.base + SCRATCH + 3,
             "work_offset": self.work_offset_word(s.work_offset),
+            "library": self.library_header(s) if self.compact else None, "tail": self.tail,
         }
+
+    # -- the compact form: G65 calls to the macro library ------------------------------
+    def library_header(self, s: ir.Setup) -> dict[str, Any]:
+        """The library's numbers and the feeds the main program sets for it."""
+        return {"first": self.lib.number(MOVE), "last": self.lib.number(POINT),
+                "feeds": [f"{self.lib.common(PROBE_FEED)}={self.feed(s.probe_feed)}",
+                          f"{self.lib.common(POSITION_FEED)}={self.feed(s.position_feed)}"]}
+
+    def call(self, offset: int, point: ir.Point, index: int) -> dict[str, Any]:
+        """``G65 P.. X.. Y.. Z.. I<index>.`` of library subprogram ``offset``."""
+        xyz = [short(self.addr(c)) for c in self.commanded(point)]
+        call = {"p": self.lib.number(offset), "xyz": xyz, "i": f"I{index}."}
+        return {**call, "line": call_line(call)}
+
+    def points(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """Each protected move, touch and retract to the move's target, one call to the
+        library's point macro (the skip position it leaves in ``#5061``-``#5063`` is
+        printed after it, as the inline program prints it before the retract)."""
+        out: list[dict[str, Any]] = []
+        k = 0
+        while k < len(blocks):
+            move, touch, back = (blocks[k:k + 3] + [{}, {}, {}])[:3]
+            if (move.get("kind") == "call_move" and touch.get("kind") == "call_touch"
+                    and back.get("kind") == "retract"
+                    and [short(v) for v in back["xyz"]] == move["xyz"]
+                    and move["feature"] == touch["feature"]
+                    and not stored_in(touch["stores"], back["xyz"])):
+                u, v, w = touch["xyz"]
+                words = f"U{u}V{v}W{w}{touch['i']}J{move['i'][1:]}"
+                call = {**touch, "p": self.lib.number(POINT), "xyz": move["xyz"], "i": words}
+                call["line"] = call_line(call)
+                if len(call["line"]) <= self.LINE_LENGTH:  # else the three calls
+                    out.append(call)
+                    k += 3
+                    continue
+            out.append(move)
+            k += 1
+        return out
+
+    def error_blocks(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """Each run of calls serving one feature, preceded by the number of its error
+        block (``#base+92``): where a library macro returns when its move fails
+        (``dialects/macro_library.py``).  The error blocks themselves go after ``M30``
+        (``self.tail``), out of the program's flow."""
+        out: list[dict[str, Any]] = []
+        open_feature = ""
+        for b in blocks:
+            if b.get("call") and b["feature"] != open_feature:
+                open_feature = b["feature"]
+                self.tail.append(self.error_block(open_feature))
+                out.append({"kind": "assign", "var": self.lib.common(ERROR_BLOCK),
+                            "value": str(self.tail[-1]["notouch"])})
+            out.append(b)
+        return out
+
+    def error_block(self, feature: str) -> dict[str, Any]:
+        notouch = self.next_label()
+        self.next_label()  # the collision block: the library returns to #base+92 + 1
+        return {"kind": "errors", "feature": feature, "notouch": notouch,
+                "collision": notouch + 1,
+                "index": self.lib.common(FAILED_MOVE)}
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One IR node as the values its template macro prints."""
@@ -131,6 +221,9 @@ class Fanuc(MacroB):
         if node.mode is ir.MoveMode.RETRACT:
             return {"kind": "retract", "xyz": xyz, "f": self.feed(self.setup.position_feed)}
         self.moves[feature] = self.moves.get(feature, 0) + 1
+        if self.compact:
+            return {"kind": "call_move", "call": True, "feature": feature,
+                    **self.call(MOVE, node.target, self.moves[feature])}
         return {"kind": "protected", "set": self.targets(node.target),
                 "feature": feature, "index": self.moves[feature],
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.position_feed),
@@ -142,6 +235,11 @@ class Fanuc(MacroB):
         end = tuple(c + k * n for c, n in zip(node.contact, node.normal, strict=True))
         stores = [f"{self.var(name)}=#{5061 + axis}" for axis, name in enumerate(node.store)
                   if name is not None]
+        if self.compact:
+            return {"kind": "call_touch", "call": True, "tag": node.role.value,
+                    "feature": node.feature, "index": node.index, "stores": stores,
+                    "fmt": self.DPRNT_FORMAT[self.units],
+                    **self.call(TOUCH, end, node.index)}  # type: ignore[arg-type]
         return {"kind": "touch", "set": self.targets(end),  # type: ignore[arg-type]
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.probe_feed),
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label(),
@@ -164,6 +262,26 @@ class Fanuc(MacroB):
             value = self.expr(node.a + node.offset if isinstance(node.a, ir.Var)
                               else node.a + node.offset)
         return {"kind": "assign", "var": self.var(node.name), "value": value}
+
+
+def call_line(b: dict[str, Any]) -> str:
+    """The ``G65`` block of a call: program ``p``, X Y Z ``xyz`` and the words ``i``."""
+    x, y, z = b["xyz"]
+    return f"G65P{b['p']}X{x}Y{y}Z{z}{b['i']}"
+
+
+def stored_in(stores: list[str], xyz: list[str]) -> bool:
+    """Whether a touch's stores (``#100=#5063``) write a variable a point names (the
+    inline retract would read the new value, a call its value before the touch)."""
+    written = {store.split("=")[0] for store in stores}
+    return any(re.search(rf"{re.escape(var)}(?!\d)", " ".join(xyz)) for var in written)
+
+
+def short(value: str) -> str:
+    """A number without its trailing zeros (``21.0000`` -> ``21.``, ``0.5000`` ->
+    ``0.5``; the decimal point stays, so no control reads it in least input increments);
+    a variable or an expression unchanged."""
+    return value.rstrip("0") if "." in value and "#" not in value else value
 
 
 def feature_owners(nodes: list[ir.Node]) -> dict[int, str]:

@@ -91,6 +91,8 @@ class Setup:
         line_length: the control's longest block, characters (0: the dialect's own).
         program_memory: the memory free for the program, bytes (0: not checked).
         limits_source: where the limits come from, for messages (the profile path).
+        library_number: O number of the first subprogram of the macro library a compact
+            Macro B program calls (``[controller] library_number``).
     """
 
     program_number: int
@@ -116,6 +118,7 @@ class Setup:
     line_length: int = 0
     program_memory: int = 0
     limits_source: str = ""
+    library_number: int = 8000
 
 
 @dataclass(frozen=True, slots=True)

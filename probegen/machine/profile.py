@@ -104,6 +104,9 @@ class Controller:
             default :data:`DEFAULT_OPTIONS` of the dialect).
         program_memory: the part-program memory free for one program, bytes (0: not
             checked).
+        library_number: the O number of the first subprogram of probegen's macro
+            library (``[controller] library_number``, default 8000; the library takes
+            the numbers from it up, each checked against ``program_numbers``).
     """
 
     line_length: int
@@ -115,6 +118,7 @@ class Controller:
     program_numbers: tuple[int, int] = (1, 8999)
     options: tuple[str, ...] = ()
     program_memory: int = 0
+    library_number: int = 8000
 
     def has(self, option: str) -> bool:
         """Whether the profile declares ``option`` (a key of :data:`OPTIONS`)."""
@@ -306,6 +310,8 @@ def _controller(t: Table, dialect: str) -> Controller:
         program_numbers=_program_numbers(t, dialect),
         options=_options(t, dialect),
         program_memory=t.get_int("program_memory", 0, minimum=0) or 0,
+        library_number=t.get_int("library_number", 8000, minimum=1,
+                                 maximum=PROGRAM_NUMBER_MAX) or 8000,
     )
 
     t.done()

@@ -51,7 +51,8 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         variable_base=m.controller.variable_base, reset_codes=m.controller.reset_codes,
         probe_length=m.probe.length, options=m.controller.options,
         line_length=m.controller.line_length, program_memory=m.controller.program_memory,
-        limits_source=m.source, **calibration_header(m),
+        limits_source=m.source, library_number=m.controller.library_number,
+        **calibration_header(m),
     )
 
 

@@ -240,7 +240,8 @@ HOME: Vec3 = (0.0, 0.0, 500.0)
 def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<program>",
              tool: int = 20, home: Vec3 = HOME,
              work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
-             feed_override: float = 100.0) -> SimResult:
+             feed_override: float = 100.0,
+             program_dir: Path | None = None) -> SimResult:
     """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -256,6 +257,9 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
             :func:`program_control`).
         feed_override: the operator's feed override, percent (Macro B only: scales G1
             and G31 feeds while ``#3004`` does not hold it; the virtual clock).
+        program_dir: where called subprograms ``O<n>.nc`` are looked for (a compact
+            program's macro library); a subprogram found neither in the text nor there
+            stops the run with alarm 76 naming it.
     """
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
@@ -268,7 +272,7 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
 
     variables = {5221: work_offset[0], 5222: work_offset[1], 5223: work_offset[2],
                  11000 + tool: 0.0, 10000 + tool: 0.0}
-    res = run_program(text, vm, source=source, variables=variables,
+    res = run_program(text, vm, source=source, variables=variables, program_dir=program_dir,
                       settings=control_settings(control, home=home,
                                                 feed_override=feed_override))
     alarm = None
