@@ -466,7 +466,8 @@ def _run(args: argparse.Namespace) -> int:
     """Run the parsed command; a ``ProbegenError`` is its one-line message."""
     import probegen.cli.progress
 
-    probegen.cli.progress.ENABLED = not args.quiet
+    enabled = probegen.cli.progress.ENABLED
+    probegen.cli.progress.ENABLED = not args.quiet  # for this command only
     try:
         with inputs_protected(_inputs(args)):
             return int(args.func(args))
@@ -474,6 +475,8 @@ def _run(args: argparse.Namespace) -> int:
         _traceback(args.debug)
         print(f"probegen: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    finally:
+        probegen.cli.progress.ENABLED = enabled
 
 
 _OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation", "pty"})
