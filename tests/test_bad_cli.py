@@ -227,12 +227,22 @@ def test_random_command_lines(command: str, fragments: list[str]) -> None:
 ])
 def test_quiet_takes_effect_anywhere(in_repo: Path, monkeypatch: pytest.MonkeyPatch,
                                      argv: list[str], bars: bool) -> None:
+    import probegen.cli.app
     import probegen.cli.progress
 
-    monkeypatch.setattr(probegen.cli.progress, "ENABLED", not bars)  # restored afterwards
+    seen: list[bool] = []
+    inputs = probegen.cli.app._inputs
+
+    def spy(args: object) -> list[str]:  # called while the command runs
+        seen.append(probegen.cli.progress.ENABLED)
+        return inputs(args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(probegen.cli.app, "_inputs", spy)
+    monkeypatch.setattr(probegen.cli.progress, "ENABLED", not bars)
     code, err = run(argv)
     assert code == ExitCode.OK, err
-    assert probegen.cli.progress.ENABLED is bars
+    assert seen == [bars]
+    assert probegen.cli.progress.ENABLED is (not bars)  # for that command only
 
 
 def test_a_warning_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
