@@ -34,8 +34,9 @@ DATA = TESTS / "data" / "macrob"
 REF = Path(__file__).resolve().parents[2] / "shared" / "ref" / "macro-b"
 REF_FILES = tuple(sorted(REF.glob("*.NC")))
 GOLDENS = tuple(sorted(p for p in (TESTS / "golden").glob("*/*.nc")
-                       if not p.match("macros/O*.nc")))
-"""The golden measuring programs (the macro library's subprograms: test_macro_library)."""
+                       if p.parent.name != "macros"))
+"""The golden inline programs (the macro library and the compact program that calls it:
+tests/test_macro_library.py, which runs them against the inline form)."""
 HAAS = control_settings("haas")
 """Haas goldens cancel mirror imaging with G100 where Fanuc writes G50.1."""
 
