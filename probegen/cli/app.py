@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from probegen import __version__
+from probegen.cli.history import STORE_HELP
 from probegen.cli.options import dialect_help, finite, non_negative, positive
 from probegen.cli.plan import _compile, _features, _macros, _plan, _sphere_points, _target
 from probegen.cli.probe import add_probe_options, probe_from_args
@@ -277,10 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: the spec's [evaluation] decision_rule, else simple)")
     add_log_options(i)
     add_identity_options(i)
-    i.add_argument("--store", metavar="URL",
-                   help="also record the run in a results store: a SQLite file (path or "
-                        "sqlite:///FILE) or postgresql://USER:PASSWORD@HOST/DB "
-                        "(docs/store.md)")
+    i.add_argument("--store", metavar="URL", help=f"also record the run in {STORE_HELP}")
     i.set_defaults(func=_ingest)
 
     cp = sub.add_parser("capture", help="record what the machine sends on a serial port")
@@ -348,8 +346,8 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("-o", "--output", default="report.html", help="the HTML file")
     rp.add_argument("--title", help="title of the report")
     rp.add_argument("--store", metavar="URL",
-                    help="add the history of the part's characteristics from this results "
-                         "store: trend charts with tolerance and control limits")
+                    help="add trend charts (tolerance, control limits) of the part's "
+                         f"characteristics from {STORE_HELP}")
     rp.set_defaults(func=_report)
     _post_parsers(sub)
 

@@ -19,8 +19,9 @@ from probegen.files import write_file
 if TYPE_CHECKING:
     from probegen.spc.series import Series
 
-STORE_HELP = ("the results store: a SQLite file (a path or sqlite:///PATH) or a PostgreSQL "
-              "database (postgresql://USER:PASSWORD@HOST/DB)")
+STORE_HELP = ("a results store: a SQLite file (a path or sqlite:///PATH) or a PostgreSQL "
+              "database (postgresql://USER:PASSWORD@HOST/DB; docs/store.md)")
+"""What ``--store URL`` names, for every command that takes it."""
 
 
 def add_history_commands(sub: Any) -> None:
