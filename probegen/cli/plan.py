@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 def _compile(args: argparse.Namespace) -> int:
     from probegen.cli.progress import Bar
     from probegen.dialects import get_dialect
+    from probegen.dialects.split import fit
     from probegen.planning import check_options, part_of, plan_program
     from probegen.spec.model import load_spec
 
@@ -33,6 +34,7 @@ def _compile(args: argparse.Namespace) -> int:
                             "beside it (or write it with probegen macros -o DIR)")
     part: Part | None = None
     outputs = []
+    written: dict[Path, str] = {}
     for name in names:
         dialect = get_dialect(name)
         if part is None:
@@ -41,13 +43,19 @@ def _compile(args: argparse.Namespace) -> int:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
         dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
-        text = dialect.generate(planned.program)
         library = checked_library(dialect, spec.machine) if dialect.compact else {}
+        fitted = fit(dialect, planned.program, library)
+        check_part_numbers(fitted, spec, library)
         if args.output == "-":
-            sys.stdout.write(text)
+            if fitted.parts:
+                raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
+                                    f"stdout; the {name} program is split into "
+                                    f"{len(fitted.parts)} parts, written beside it")
+            sys.stdout.write(fitted.main)
             continue
         target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
-        write_file(target, text, f"the {name} program", encoding="ascii")
+        write_file(target, fitted.main, f"the {name} program", encoding="ascii")
+        write_parts(target, fitted, written)
         write_library(target.parent, library)
         outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
     from probegen.machine.calibration import UNCALIBRATED
@@ -68,6 +76,49 @@ def _compile(args: argparse.Namespace) -> int:
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
     return ExitCode.OK
+
+
+def check_part_numbers(fitted: Any, spec: Any, library: dict[str, str]) -> None:
+    """Refuse a split program's part numbers outside the machine's range or among the
+    macro library's.
+
+    Raises:
+        SpecError: names the part, the number and the keys.
+    """
+    from probegen.errors import SpecError
+
+    taken = {name.removesuffix(".nc") for name in library}
+    for k, p in enumerate(fitted.parts, start=1):
+        where = (f"{spec.source}: program.number: part {k} of the split program "
+                 f"(O{spec.program_number:04d} + {k})")
+        spec.machine.check_program_number(p.number, where)
+        if f"O{p.number:04d}" in taken:
+            raise SpecError(f"{where}: expected a number apart from the macro library's, "
+                            f"found O{p.number:04d} ({spec.machine.source}: "
+                            "controller.library_number); give the program a number further "
+                            "from the library's")
+
+
+def write_parts(target: Path, fitted: Any, written: dict[Path, str]) -> None:
+    """Write a split program's parts beside its driver ``target`` and say so; a part
+    file another dialect of the same compile wrote with other text is refused.
+
+    Raises:
+        ProbegenError: two dialects' parts would share a file.
+    """
+    for p in fitted.parts:
+        path = target.parent / p.file_name
+        if written.get(path, p.text) != p.text:
+            raise ProbegenError(f"compile: {path}: expected one text per part file, found two "
+                                "dialects' parts of a split program with the same name; "
+                                "compile each dialect into its own folder")
+        written[path] = p.text
+        write_file(path, p.text, "a part of a split program", encoding="ascii")
+    if fitted.parts:
+        largest = max(len(p.text) for p in fitted.parts)
+        print(f"split {target.name} into a driver and {len(fitted.parts)} parts (largest "
+              f"{largest} bytes): wrote {', '.join(p.file_name for p in fitted.parts)} in "
+              f"{target.parent}; run {target.name}, it calls them with M98")
 
 
 def checked_library(dialect: Any, machine: Any) -> dict[str, str]:

@@ -88,6 +88,52 @@ class MacroB(Dialect):
                     f"most {self.ALARM_TEXT_LENGTH} characters, found {len(found[1])}: "
                     f"{found[1]!r}")
 
+    def generate(self, program: ir.Program) -> str:
+        """The program text, its common variables checked against the profile's
+        (:meth:`check_common_variables`)."""
+        text = super().generate(program)
+        self.check_common_variables(program)
+        return text
+
+    def used_variables(self, program: ir.Program) -> list[tuple[int, str]]:
+        """The common variables the program writes, with what each holds: the named
+        run-time values from ``#base``, the scratch values (the macro library's commons
+        in a compact program) at ``#base+90``..``#base+93``, and the variables in-process
+        decisions name (a check's ``flag``, an alignment's ``variable``)."""
+        base = program.setup.variable_base
+        used = [(number, "a run-time value") for number in sorted(self.vars.values())]
+        used += [(base + SCRATCH + k, "a scratch value") for k in range(4)]
+        for node in ir.walk(program.body):
+            if isinstance(node, ir.Check) and node.flag is not None:
+                used.append((node.flag, f"the flag of feature {node.feature}"))
+            if isinstance(node, ir.Align) and node.variable is not None:
+                used.append((node.variable, f"the angle of feature {node.feature}"))
+        return used
+
+    def check_common_variables(self, program: ir.Program) -> None:
+        """Refuse a variable outside the control's common variables
+        (``ir.Setup.common_variables``, the profile's ``[controller]
+        common_variables``; not checked when empty).
+
+        Raises:
+            UnsupportedError: names the variable, what it holds, the ranges and the keys.
+        """
+        s = program.setup
+        ranges = s.common_variables
+        if not ranges:
+            return
+        for number, what in self.used_variables(program):
+            if not any(first <= number <= last for first, last in ranges):
+                have = ", ".join(f"#{a}-#{b}" for a, b in ranges)
+                raise UnsupportedError(
+                    f"dialect {self.NAME!r}: the program uses #{number} ({what}; "
+                    f"#{s.variable_base}-#{s.variable_base + SCRATCH + 3} from "
+                    f"{s.limits_source}: controller.variable_base), expected a common "
+                    f"variable of the control: {have} ({s.limits_source}: "
+                    "controller.common_variables); move variable_base (or the action's "
+                    "variable) into a range the control has, or declare the range if it "
+                    "has it (the option for #100-#499 on a Fanuc 0i)")
+
     def feed(self, mm_per_min: float) -> str:
         """A feed in program units per minute, with the decimal point Fanuc wants."""
         return self.num(self.scale(mm_per_min), 0) + "."

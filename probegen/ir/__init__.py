@@ -89,7 +89,12 @@ class Setup:
             written, no override lock); the dialect writes the reset codes of optional
             modes and ``#3003``/``#3004`` around touches only when declared.
         line_length: the control's longest block, characters (0: the dialect's own).
-        program_memory: the memory free for the program, bytes (0: not checked).
+        program_memory: the memory free for all the files of the program (a split
+            program's driver and parts, the macro library), bytes (0: not checked).
+        program_size: the largest single program the control takes, bytes (0: as
+            ``program_memory``); a larger one is split (:mod:`probegen.dialects.split`).
+        common_variables: the common variables the control has, ``(first, last)``
+            ranges (empty: not checked).
         limits_source: where the limits come from, for messages (the profile path).
         library_number: O number of the first subprogram of the macro library a compact
             Macro B program calls (``[controller] library_number``).
@@ -119,6 +124,8 @@ class Setup:
     program_memory: int = 0
     limits_source: str = ""
     library_number: int = 8000
+    program_size: int = 0
+    common_variables: tuple[tuple[int, int], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -102,8 +102,16 @@ class Controller:
             (``[controller] program_numbers``; default :func:`default_program_numbers`).
         options: the controller options the machine has (keys of :data:`OPTIONS`;
             default :data:`DEFAULT_OPTIONS` of the dialect).
-        program_memory: the part-program memory free for one program, bytes (0: not
-            checked).
+        program_memory: the part-program memory free for probegen's programs, bytes:
+            every file one ``compile`` writes (the program, or the driver and its parts,
+            and the macro library) must fit in it together (0: not checked).
+        program_size: the largest single program the control takes, bytes (the memory
+            left for one program, or the control's limit for a program it stores and
+            edits); a larger program is split into a driver and parts (0: the same as
+            ``program_memory``).
+        common_variables: the common variables the control has, ``(first, last)``
+            ranges (``[controller] common_variables``; default
+            :data:`DEFAULT_COMMON_VARIABLES` of the dialect; empty: not checked).
         library_number: the O number of the first subprogram of probegen's macro
             library (``[controller] library_number``, default 8000; the library takes
             the numbers from it up, each checked against ``program_numbers``).
@@ -119,12 +127,26 @@ class Controller:
     options: tuple[str, ...] = ()
     program_memory: int = 0
     library_number: int = 8000
+    program_size: int = 0
+    common_variables: tuple[tuple[int, int], ...] = ()
 
     def has(self, option: str) -> bool:
         """Whether the profile declares ``option`` (a key of :data:`OPTIONS`)."""
         return option in self.options
 
 
+DEFAULT_COMMON_VARIABLES: dict[str, tuple[tuple[int, int], ...]] = {
+    "fanuc": ((100, 199), (500, 999)),
+    "haas": ((100, 199), (500, 549), (600, 699), (800, 999)),
+}
+"""Common variables of a profile that does not list them, by dialect (others: not
+checked): a Fanuc 0i has #100-#199 (cleared at power-off) and #500-#999 (kept); the
+option "addition of custom macro common variables" gives #100-#499, which a profile
+declares with ``common_variables = [[100, 499], [500, 999]]``.  Haas: #100-#199 and
+#500-#999 less #550-#599 (probe calibration, as ``dialects/haas.py`` refuses them) and
+#700-#799 (#700-#749 hidden, for the control; the rest left out for want of a manual)."""
+VARIABLE_MAX = 99999
+"""Highest variable number a ``common_variables`` range may name."""
 DEFAULT_RESET = ("G17", "G40", "G49", "G80", "G94", "G69")
 PROTECTED = (9000, 9999)
 """Program numbers Fanuc controls protect (parameter NE9) and Haas controls lock
@@ -312,7 +334,12 @@ def _controller(t: Table, dialect: str) -> Controller:
         program_memory=t.get_int("program_memory", 0, minimum=0) or 0,
         library_number=t.get_int("library_number", 8000, minimum=1,
                                  maximum=PROGRAM_NUMBER_MAX) or 8000,
+        program_size=t.get_int("program_size", 0, minimum=0) or 0,
+        common_variables=_common_variables(t, dialect),
     )
+    if c.program_memory and c.program_size > c.program_memory:
+        raise t.fail("program_size", f"at most program_memory ({c.program_memory}): one "
+                                     "program cannot be larger than the memory all share")
 
     t.done()
     return c
@@ -330,6 +357,22 @@ def _program_numbers(t: Table, dialect: str) -> tuple[int, int]:
         raise t.fail("program_numbers", f"[first, last] program numbers with "
                                         f"1 <= first <= last <= {PROGRAM_NUMBER_MAX}")
     return value[0], value[1]
+
+
+def _common_variables(t: Table, dialect: str) -> tuple[tuple[int, int], ...]:
+    """``common_variables = [[first, last], ...]``: ranges of whole numbers with
+    1 <= first <= last <= :data:`VARIABLE_MAX`; the dialect's default when absent."""
+    value = t.get_any("common_variables")
+    if value is None:
+        return DEFAULT_COMMON_VARIABLES.get(dialect, ())
+    ok = isinstance(value, list) and all(
+        isinstance(r, list) and len(r) == 2
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in r)
+        and 1 <= r[0] <= r[1] <= VARIABLE_MAX for r in value)
+    if not ok:
+        raise t.fail("common_variables", "an array of [first, last] variable ranges with "
+                                         f"1 <= first <= last <= {VARIABLE_MAX}")
+    return tuple(sorted((r[0], r[1]) for r in value))
 
 
 def _options(t: Table, dialect: str) -> tuple[str, ...]:

@@ -52,6 +52,8 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         probe_length=m.probe.length, options=m.controller.options,
         line_length=m.controller.line_length, program_memory=m.controller.program_memory,
         limits_source=m.source, library_number=m.controller.library_number,
+        program_size=m.controller.program_size,
+        common_variables=m.controller.common_variables,
         **calibration_header(m),
     )
 
