@@ -102,7 +102,7 @@ def test_each_part_sets_the_state_it_relies_on() -> None:
         assert not any(line.startswith(("DPRNT[PG", "G0 G43")) for line in lines)
     driver = split.main.splitlines()
     assert [line for line in driver if line.startswith("M98")] == ["M98 P1003", "M98 P1004"]
-    assert driver[2:5] == ["(RUNS 2 PARTS WITH M98, FILES BESIDE IT:)", "(O1003.NC: BOSS)",
+    assert driver[5:8] == ["(RUNS 2 PARTS WITH M98, FILES BESIDE IT:)", "(O1003.NC: BOSS)",
                            "(O1004.NC: BORE)"]
     order = ["T20 M6", "G54", "G0 G43 H20 Z100.0000", "M19", "POPEN", "M98 P1003",
              "M98 P1004", "PCLOS", "M30"]
@@ -316,3 +316,31 @@ def test_any_common_variables_value_is_ranges_or_a_spec_error(
     assert isinstance(value, list)
     assert sorted(tuple(r) for r in value) == list(ranges)  # type: ignore[arg-type]
     assert all(1 <= a <= b <= 99999 for a, b in ranges)
+
+
+# -- alarm_text_length -------------------------------------------------------------------
+
+def test_alarm_texts_follow_the_profiles_length(tmp_path: Path) -> None:
+    """24 characters: probegen's own texts shorten (``HOUSINGBORE BADFIT``, whole at
+    the default 26); 23: the fixed ``UNEXPECTED PROBE TRIGGER`` (24) is refused at
+    compile time, naming the key."""
+    def program(length: int) -> str:
+        spec = spec_with(tmp_path, f"program_size = 0\nalarm_text_length = {length}",
+                         SAMPLE / "bore_block_actions.toml")
+        spec.write_text(spec.read_text().replace('id = "BORE"', 'id = "HOUSINGBORE"'))
+        return fitted(load_spec(spec))[0]
+
+    def messages(text: str) -> list[str]:
+        return re.findall(r"^#300[06]=\d+\((.*)\)$", text, re.M)
+
+    assert "HOUSINGBORE NO CIRCLE FIT" in messages(program(26))
+    short = messages(program(24))
+    assert max(len(m) for m in short) == 24
+    assert "HOUSINGBORE BADFIT" in short and "HOUSINGBORE BIGCORR" in short
+    with pytest.raises(UnsupportedError, match=r"expected an alarm message of at most 23 "
+                       r"characters \(.*machine.toml: controller.alarm_text_length\), found "
+                       r"24: 'UNEXPECTED PROBE TRIGGER'"):
+        program(23)
+    spec_with(tmp_path, "alarm_text_length = 11")
+    with pytest.raises(SpecError, match="controller.alarm_text_length: expected"):
+        load_profile(tmp_path / "machine.toml")

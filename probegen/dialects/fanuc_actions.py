@@ -40,11 +40,11 @@ TOOL_LINE = {"radius": 13, "length": 11}
 SHORT_TEXTS = {"OUT OF TOL": "OUTTOL", "NO CIRCLE FIT": "BADFIT",
                "TOOL CORR TOO BIG": "BIGCORR"}
 """Each alarm text's short form (the ``ERR`` word of its DPRNT line), used when the
-feature id and the whole text do not fit the dialect's ``ALARM_TEXT_LENGTH``."""
+feature id and the whole text do not fit the control's (``MacroB.alarm_length``)."""
 
 
 def alarm_text(d: MacroB, feature: str, text: str) -> str:
-    """The message ``<feature> <text>`` of an alarm, within ``d.ALARM_TEXT_LENGTH``.
+    """The message ``<feature> <text>`` of an alarm, within ``d.alarm_length()``.
 
     The feature id is never cut (the operator must know which feature stopped the
     machine): when the whole message is too long the text takes its short form
@@ -56,10 +56,10 @@ def alarm_text(d: MacroB, feature: str, text: str) -> str:
     """
     for words in (text, SHORT_TEXTS[text]):
         message = f"{feature} {words}"
-        if len(message) <= d.ALARM_TEXT_LENGTH:
+        if len(message) <= d.alarm_length():
             return message
     raise UnsupportedError(f"dialect {d.NAME!r}: feature {feature}: expected an alarm message "
-                           f"of at most {d.ALARM_TEXT_LENGTH} characters, found "
+                           f"of at most {d.alarm_length()} characters, found "
                            f"{len(message)}: {message!r}; use a shorter feature id")
 
 

@@ -74,18 +74,28 @@ class MacroB(Dialect):
         self.label += 1
         return self.label
 
+    def alarm_length(self) -> int:
+        """The longest alarm message of the program being written: the profile's
+        ``[controller] alarm_text_length`` when it sets one, else ``ALARM_TEXT_LENGTH``."""
+        limits = self.limits
+        return limits.alarm_text_length if limits and limits.alarm_text_length else \
+            self.ALARM_TEXT_LENGTH
+
     def check_messages(self, text: str) -> None:
-        """Refuse a ``#3000``/``#3006`` message longer than ``ALARM_TEXT_LENGTH``.
+        """Refuse a ``#3000``/``#3006`` message longer than :meth:`alarm_length`.
 
         Raises:
-            UnsupportedError: names the line, the message and the limit.
+            UnsupportedError: names the line, the message, the limit and what sets it.
         """
+        limit = self.alarm_length()
+        source = (f" ({self.limits.limits_source}: controller.alarm_text_length)"
+                  if self.limits and self.limits.alarm_text_length else "")
         for number, line in enumerate(text.split("\n"), start=1):
             found = MESSAGE.match(line)
-            if found and len(found[1]) > self.ALARM_TEXT_LENGTH:
+            if found and len(found[1]) > limit:
                 raise UnsupportedError(
                     f"dialect {self.NAME!r}: line {number}: expected an alarm message of at "
-                    f"most {self.ALARM_TEXT_LENGTH} characters, found {len(found[1])}: "
+                    f"most {limit} characters{source}, found {len(found[1])}: "
                     f"{found[1]!r}")
 
     def generate(self, program: ir.Program) -> str:

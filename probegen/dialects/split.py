@@ -302,6 +302,7 @@ def driver(dialect: Fanuc, program: ir.Program, parts: tuple[Part, ...]) -> str:
         if len(note) > limit:
             note = f"({p.file_name.upper()}: {p.features[0]} TO {p.features[-1]})"
         notes.append(note)
+    head = next(k for k, line in enumerate(lines) if k > 1 and not line.startswith("("))
     end = next(k for k, line in enumerate(lines) if line.startswith("DPRNT[PGEND*"))
     calls = [f"M98 P{p.number:04d}" for p in parts]
-    return "\n".join([*lines[:2], *notes, *lines[2:end], *calls, *lines[end:]])
+    return "\n".join([*lines[:head], *notes, *lines[head:end], *calls, *lines[end:]])

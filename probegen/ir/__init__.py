@@ -95,6 +95,8 @@ class Setup:
             ``program_memory``); a larger one is split (:mod:`probegen.dialects.split`).
         common_variables: the common variables the control has, ``(first, last)``
             ranges (empty: not checked).
+        alarm_text_length: the longest macro alarm message, characters (0: the
+            dialect's ``ALARM_TEXT_LENGTH``).
         limits_source: where the limits come from, for messages (the profile path).
         library_number: O number of the first subprogram of the macro library a compact
             Macro B program calls (``[controller] library_number``).
@@ -126,6 +128,7 @@ class Setup:
     library_number: int = 8000
     program_size: int = 0
     common_variables: tuple[tuple[int, int], ...] = ()
+    alarm_text_length: int = 0
 
 
 @dataclass(frozen=True, slots=True)

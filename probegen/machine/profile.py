@@ -112,6 +112,8 @@ class Controller:
         common_variables: the common variables the control has, ``(first, last)``
             ranges (``[controller] common_variables``; default
             :data:`DEFAULT_COMMON_VARIABLES` of the dialect; empty: not checked).
+        alarm_text_length: the longest macro alarm message the control shows whole,
+            characters (0: the dialect's, 26 on Fanuc and Haas).
         library_number: the O number of the first subprogram of probegen's macro
             library (``[controller] library_number``, default 8000; the library takes
             the numbers from it up, each checked against ``program_numbers``).
@@ -129,6 +131,7 @@ class Controller:
     library_number: int = 8000
     program_size: int = 0
     common_variables: tuple[tuple[int, int], ...] = ()
+    alarm_text_length: int = 0
 
     def has(self, option: str) -> bool:
         """Whether the profile declares ``option`` (a key of :data:`OPTIONS`)."""
@@ -336,6 +339,7 @@ def _controller(t: Table, dialect: str) -> Controller:
                                  maximum=PROGRAM_NUMBER_MAX) or 8000,
         program_size=t.get_int("program_size", 0, minimum=0) or 0,
         common_variables=_common_variables(t, dialect),
+        alarm_text_length=t.get_int("alarm_text_length", 0, minimum=12, maximum=255) or 0,
     )
     if c.program_memory and c.program_size > c.program_memory:
         raise t.fail("program_size", f"at most program_memory ({c.program_memory}): one "

@@ -54,6 +54,7 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         limits_source=m.source, library_number=m.controller.library_number,
         program_size=m.controller.program_size,
         common_variables=m.controller.common_variables,
+        alarm_text_length=m.controller.alarm_text_length,
         **calibration_header(m),
     )
 
