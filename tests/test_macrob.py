@@ -34,9 +34,10 @@ DATA = TESTS / "data" / "macrob"
 REF = Path(__file__).resolve().parents[2] / "shared" / "ref" / "macro-b"
 REF_FILES = tuple(sorted(REF.glob("*.NC")))
 GOLDENS = tuple(sorted(p for p in (TESTS / "golden").glob("*/*.nc")
-                       if p.parent.name != "macros"))
+                       if p.parent.name not in ("macros", "split")))
 """The golden inline programs (the macro library and the compact program that calls it:
-tests/test_macro_library.py, which runs them against the inline form)."""
+tests/test_macro_library.py, which runs them against the inline form; a split program's
+driver and part: tests/test_program_limits.py, which runs them against the unsplit one)."""
 HAAS = control_settings("haas")
 """Haas goldens cancel mirror imaging with G100 where Fanuc writes G50.1."""
 

@@ -128,7 +128,8 @@ def canonical(value: Any) -> str:
 _LEFT_OUT = {("Setup", "identity"), ("Setup", "calibration"), ("Setup", "calibration_id"),
              ("Check", "corrections"), ("Check", "ball_radius"), ("Setup", "options"),
              ("Setup", "line_length"), ("Setup", "program_memory"),
-             ("Setup", "limits_source")}
+             ("Setup", "limits_source"), ("Setup", "program_size"),
+             ("Setup", "common_variables"), ("Setup", "alarm_text_length")}
 """Fields the identity leaves out: the identity itself, and the probe calibration a program
 was compiled with and the radius it gives the on-control fits (its own ``PGCAL`` line ties
 the log to it, and ingest warns when it differs: a recalibrated program measures the same
