@@ -16,9 +16,10 @@ from conftest import REPO
 from probegen.results import parse_dprnt
 
 PROGRAMS = sorted(p for p in (REPO / "tests" / "golden").glob("*/*.nc")
-                  if p.parent.name != "macros")
+                  if p.parent.name not in ("macros", "split"))
 """The golden inline programs (the macro library and the compact program that calls it:
-tests/test_macro_library.py, which runs them against the inline form)."""
+tests/test_macro_library.py, which runs them against the inline form; a split program's
+driver and part: tests/test_program_limits.py, which runs them against the unsplit one)."""
 VAR = re.compile(r"#(\d+)\[(\d)(\d)\]")
 
 
