@@ -182,8 +182,10 @@ def test_a_decision_reading_an_earlier_feature_keeps_the_program_whole(
     """bore_block_actions rotates the frame by EDGE's angle at the end, after BORE and
     BOSS: no cut between EDGE and the end reads nothing measured before it."""
     spec = spec_with(tmp_path, source=SAMPLE / "bore_block_actions.toml")
-    with pytest.raises(UnsupportedError, match=r"cannot be split at a feature boundary: not "
-                       r"between EDGE and TOP: EDGE\.\w+, measured before, is read after"):
+    with pytest.raises(UnsupportedError, match=r"cannot be split at a feature boundary .*: "
+                       r"not between EDGE and TOP \(align of feature EDGE reads EDGE.A\); "
+                       r"not between TOP and BORE \(set_work_offset of feature TOP reads "
+                       r"TOP.P\);"):
         fitted(load_spec(spec))
 
 

@@ -43,6 +43,7 @@ from probegen import ir
 from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import Fanuc
 from probegen.errors import UnsupportedError
+from probegen.ir.actions import describe
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,10 +118,16 @@ def split(dialect: Fanuc, program: ir.Program, whole: int) -> Fitted:
     cuts, reasons = boundaries(body)
     too_big = (f"dialect {dialect.NAME!r}: the program is {whole} bytes, expected at most "
                f"{s.program_size} ({s.limits_source}: controller.program_size)")
+    if not cuts and not reasons:
+        raise UnsupportedError(f"{too_big}, and it measures one feature: a program is split "
+                               "between features only; raise program_size if the control "
+                               "takes it, or measure fewer touches")
     if not cuts:
-        why = "; ".join(reasons) or "it measures one feature"
-        raise UnsupportedError(f"{too_big}, and it cannot be split at a feature boundary: "
-                               f"{why}; raise program_size if the control takes it")
+        raise UnsupportedError(f"{too_big}, and it cannot be split at a feature boundary "
+                               "(a value measured before a cut may not be read after it: "
+                               f"features that share values stay in one program): "
+                               f"{'; '.join(reasons)}; raise program_size if the control "
+                               "takes it")
     ranges: list[tuple[int, int, str]] = []
     start = 0
     ends = [*cuts, len(body)]
@@ -130,11 +137,13 @@ def split(dialect: Fanuc, program: ir.Program, whole: int) -> Fitted:
             text = part_text(dialect, program, start, end, len(ranges) + 1)
             if size(text) > s.program_size:
                 if best is None:
-                    ids = ", ".join(features(body[start:end]))
+                    ids = features(body[start:end])
+                    kept = f" (kept together: {'; '.join(reasons)})" if len(ids) > 1 else ""
                     raise UnsupportedError(
-                        f"{too_big}; split at feature boundaries, the part with {ids} alone "
-                        f"is {size(text)} bytes: splitting cannot make it fit; measure "
-                        f"fewer touches in one feature or raise program_size")
+                        f"{too_big}; split at feature boundaries, the part with "
+                        f"{', '.join(ids)} alone is {size(text)} bytes{kept}: splitting "
+                        "cannot make it fit; measure fewer touches in one feature or raise "
+                        "program_size")
                 break
             best = (end, text)
         assert best is not None
@@ -182,7 +191,7 @@ def boundaries(body: tuple[ir.Node, ...]) -> tuple[list[int], list[str]]:
             continue
         why = refusal(body[:k], body[k:])
         if why:
-            reasons.append(f"not between {before[-1]} and {after[0]}: {why}")
+            reasons.append(f"not between {before[-1]} and {after[0]} ({why})")
         else:
             cuts.append(k)
     return cuts, reasons
@@ -198,10 +207,19 @@ def refusal(before: tuple[ir.Node, ...], after: tuple[ir.Node, ...]) -> str:
     for node in second:
         for name in read(node):
             if name in made or any(name.startswith(f"{f}.") for f in checked(first)):
-                return (f"{name}, measured before, is read after it (a located feature or "
-                        "an in-process decision reading an earlier feature: they stay in "
-                        "one program)")
+                return f"{reader(node)} reads {name}"
     return ""
+
+
+def reader(node: ir.Node) -> str:
+    """What reads a value, for a message (``align of feature EDGE``)."""
+    if isinstance(node, ir.ActionNode):
+        return describe(node)
+    if isinstance(node, ir.Touch):
+        return f"touch {node.index} of feature {node.feature}"
+    if isinstance(node, ir.ReportCentre):
+        return f"the centre line of feature {node.feature}"
+    return "a move" if isinstance(node, ir.Move) else f"the value {getattr(node, 'name', '')}"
 
 
 def features(nodes: tuple[ir.Node, ...]) -> tuple[str, ...]:
