@@ -25,7 +25,7 @@ from test_haas_closed_loop import WORK, oversize_bore_block, placed_part, result
 from test_macro_library import library
 from test_program_numbers import toml
 
-from probegen import cad
+from probegen import cad, ir
 from probegen.cli.app import ExitCode, main
 from probegen.dialects import get_dialect
 from probegen.dialects.split import Fitted, fit
@@ -346,3 +346,39 @@ def test_alarm_texts_follow_the_profiles_length(tmp_path: Path) -> None:
     spec_with(tmp_path, "alarm_text_length = 11")
     with pytest.raises(SpecError, match="controller.alarm_text_length: expected"):
         load_profile(tmp_path / "machine.toml")
+
+
+# -- the state a part restates -----------------------------------------------------------
+
+def sphere_block(name: str, x: float) -> ir.FeatureBlock:
+    """A two-touch sphere at ``x`` (a protected move, a touch, a retract each)."""
+    nodes: list[ir.Node] = []
+    for k, dx in enumerate((1.0, -1.0), start=1):
+        start = (x + dx * 20.0, 0.0, 30.0)
+        nodes += [ir.Move(start, ir.MoveMode.PROTECTED),
+                  ir.Touch(name, k, ir.TouchRole.MEASURE, (x + dx * 12.5, 0.0, 30.0),
+                           (dx, 0.0, 0.0), 2.0, 2.0),
+                  ir.Move(start, ir.MoveMode.RETRACT)]
+    return ir.FeatureBlock(ir.SphereDef(name, (x, 0.0, 30.0), 25.0), tuple(nodes))
+
+
+def test_a_part_restates_the_rotary_pose_before_it() -> None:
+    """After a head tilt every point is commanded less the head shift: the second part
+    turns to the same pose itself (a null move) and commands its points as the unsplit
+    program does."""
+    setup = ir.Setup(
+        program_number=7, program_name="T", units="mm", work_offset="G54", clearance_z=50.0,
+        ball_diameter=6.0, shank_diameter=4.0, tool_number=20, tool_change=False,
+        position_feed=2000.0, probe_feed=300.0, probe_on=(), probe_off=(), variable_base=500,
+        reset_codes=("G17",), probe_length=40.0, program_size=1500)
+    body = (ir.Rotary(30.0, None, (1.5, 0.0, -0.5)), sphere_block("A", 0.0),
+            sphere_block("B", 100.0))
+    whole = get_dialect("fanuc").generate(ir.Program(setup, body))
+    split = fit(get_dialect("fanuc"), ir.Program(setup, body))
+    assert [p.features for p in split.parts] == [("A",), ("B",)]
+    second = split.parts[1].text
+    assert "\nG53 B30.0000\n(FEATURE B SPHERE" in second
+    touches = [line for line in whole.splitlines() if line.startswith("#590=")]
+    assert "#590=118.5000" in touches  # B's first point, 120 less the 1.5 mm shift
+    assert [line for line in second.splitlines() if line.startswith("#590=")] == \
+        touches[len(touches) // 2:]
