@@ -313,9 +313,10 @@ def test_any_common_variables_value_is_ranges_or_a_spec_error(
     try:
         ranges = load_profile(folder / "machine.toml").controller.common_variables
     except SpecError as exc:
-        assert "controller.common_variables: expected an array of [first, last]" in str(exc)
+        assert "controller.common_variables: expected a non-empty array of [first, last]" \
+            in str(exc)
         return
-    assert isinstance(value, list)
+    assert isinstance(value, list) and value
     assert sorted(tuple(r) for r in value) == list(ranges)  # type: ignore[arg-type]
     assert all(1 <= a <= b <= 99999 for a, b in ranges)
 

@@ -364,18 +364,18 @@ def _program_numbers(t: Table, dialect: str) -> tuple[int, int]:
 
 
 def _common_variables(t: Table, dialect: str) -> tuple[tuple[int, int], ...]:
-    """``common_variables = [[first, last], ...]``: ranges of whole numbers with
-    1 <= first <= last <= :data:`VARIABLE_MAX`; the dialect's default when absent."""
+    """``common_variables = [[first, last], ...]``: at least one range of whole numbers
+    with 1 <= first <= last <= :data:`VARIABLE_MAX`; the dialect's default when absent."""
     value = t.get_any("common_variables")
     if value is None:
         return DEFAULT_COMMON_VARIABLES.get(dialect, ())
-    ok = isinstance(value, list) and all(
+    ok = isinstance(value, list) and len(value) > 0 and all(
         isinstance(r, list) and len(r) == 2
         and all(isinstance(v, int) and not isinstance(v, bool) for v in r)
         and 1 <= r[0] <= r[1] <= VARIABLE_MAX for r in value)
     if not ok:
-        raise t.fail("common_variables", "an array of [first, last] variable ranges with "
-                                         f"1 <= first <= last <= {VARIABLE_MAX}")
+        raise t.fail("common_variables", "a non-empty array of [first, last] variable "
+                                         f"ranges with 1 <= first <= last <= {VARIABLE_MAX}")
     return tuple(sorted((r[0], r[1]) for r in value))
 
 
