@@ -14,6 +14,7 @@ program's DPRNT log byte for byte: it must be ``same``.
 from __future__ import annotations
 
 import dataclasses
+import re
 import sys
 import tempfile
 import time
@@ -45,7 +46,9 @@ def row(program: object, placed: object, ball: float, size: int, compact: bool) 
         d.compact = compact
         split = fit(d, program)  # type: ignore[arg-type]
     except ProbegenError as exc:
-        return f"| {form} | {size} | {len(whole)} | refused: {str(exc)[:60]}... | | | | |"
+        alone = re.search(r"the part with (.*) alone is (\d+) bytes", str(exc))
+        why = f"{alone[1]} alone is {alone[2]} bytes" if alone else str(exc)
+        return f"| {form} | {size} | {len(whole)} | refused: {why} | | | | |"
     took = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)

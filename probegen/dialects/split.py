@@ -132,26 +132,38 @@ def split(dialect: Fanuc, program: ir.Program, whole: int) -> Fitted:
     start = 0
     ends = [*cuts, len(body)]
     while start < len(body):
-        best: tuple[int, str] | None = None
-        for end in (e for e in ends if e > start):
-            text = part_text(dialect, program, start, end, len(ranges) + 1)
-            if size(text) > s.program_size:
-                if best is None:
-                    ids = features(body[start:end])
-                    kept = f" (kept together: {'; '.join(reasons)})" if len(ids) > 1 else ""
-                    raise UnsupportedError(
-                        f"{too_big}; split at feature boundaries, the part with "
-                        f"{', '.join(ids)} alone is {size(text)} bytes{kept}: splitting "
-                        "cannot make it fit; measure fewer touches in one feature or raise "
-                        "program_size")
-                break
-            best = (end, text)
-        assert best is not None
-        ranges.append((start, best[0], best[1]))
-        start = best[0]
+        k = len(ranges) + 1
+        after = [e for e in ends if e > start]
+        text = part_text(dialect, program, start, after[0], k)
+        if size(text) > s.program_size:
+            ids = features(body[start:after[0]])
+            kept = f" (kept together: {'; '.join(reasons)})" if len(ids) > 1 else ""
+            raise UnsupportedError(
+                f"{too_big}; split at feature boundaries, the part with {', '.join(ids)} "
+                f"alone is {size(text)} bytes{kept}: splitting cannot make it fit; measure "
+                "fewer touches in one feature or raise program_size")
+        end, text = longest(dialect, program, start, after, text, k)
+        ranges.append((start, end, text))
+        start = end
     parts = tuple(Part(s.program_number + k, features(body[a:b]), text)
                   for k, (a, b, text) in enumerate(ranges, start=1))
     return Fitted(driver(dialect, program, parts), parts)
+
+
+def longest(dialect: Fanuc, program: ir.Program, start: int, ends: list[int], first: str,
+            k: int) -> tuple[int, str]:
+    """The farthest of ``ends`` part ``k`` from ``start`` may reach within
+    ``program_size``, and its text (``first``: the text to ``ends[0]``, which fits).  A
+    part's size grows with its end, so the search halves the candidates each time."""
+    lo, hi, best = 0, len(ends) - 1, first
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        text = part_text(dialect, program, start, ends[mid], k)
+        if size(text) <= program.setup.program_size:
+            lo, best = mid, text
+        else:
+            hi = mid - 1
+    return ends[lo], best
 
 
 def check_memory(dialect: Dialect, s: ir.Setup, fitted: Fitted,
