@@ -317,7 +317,7 @@ def test_any_common_variables_value_is_ranges_or_a_spec_error(
             in str(exc)
         return
     assert isinstance(value, list) and value
-    assert sorted(tuple(r) for r in value) == list(ranges)  # type: ignore[arg-type]
+    assert sorted(tuple(r) for r in value) == list(ranges)
     assert all(1 <= a <= b <= 99999 for a, b in ranges)
 
 
@@ -383,3 +383,52 @@ def test_a_part_restates_the_rotary_pose_before_it() -> None:
     assert "#590=118.5000" in touches  # B's first point, 120 less the 1.5 mm shift
     assert [line for line in second.splitlines() if line.startswith("#590=")] == \
         touches[len(touches) // 2:]
+
+
+# -- every controller option -------------------------------------------------------------
+
+def with_option(tmp: Path, option: str, declared: bool) -> str:
+    """The program (or the SpecError) of the spec that needs ``option``, with only it
+    declared or with no option at all."""
+    from test_controller_options import ACTIONS_SPEC, profile_text, program, write_spec
+
+    from probegen.planning import check_options
+
+    options = f'["{option}"]' if declared else "[]"
+    try:
+        if option == "G68":
+            spec = load_spec(write_spec(tmp, ACTIONS_SPEC, profile_text(options=options)))
+            check_options(spec)
+            return "align checked"
+        dialect = "haas" if option == "G154" else "fanuc"
+        machine = f'dialect = "{dialect}"'
+        if option in ("G54.1", "G154"):
+            machine += f'\nwork_offset = "{option} P3"'
+        return program(tmp, dialect, options=options, machine=machine)
+    except SpecError as exc:
+        return f"SpecError: {exc}"
+
+
+@pytest.mark.parametrize(("option", "used"), [
+    ("G68", "align checked"), ("G68.2", " G69\n"), ("G15", " G15\n"),
+    ("G50.1", " G50.1\n"), ("G54.1", "\nG54.1 P3\n"), ("G154", "\nG154 P3\n"),
+    ("#3004", "\n#3004=2\n")])
+def test_each_option_is_used_only_when_declared(tmp_path: Path, option: str,
+                                                used: str) -> None:
+    """Declared, the program uses the option; undeclared, a spec that needs it is
+    refused naming it (G68 align, extended work offsets) or the program leaves it out
+    (the reset codes of optional modes, the override lock)."""
+    assert used in with_option(tmp_path, option, True)
+    without = with_option(tmp_path, option, False)
+    assert used not in without
+    refused = option in ("G68", "G54.1", "G154")
+    assert without.startswith("SpecError: ") is refused
+    if refused:
+        assert f"needs the controller option {option} " in without
+
+
+def test_every_option_has_its_case() -> None:
+    from probegen.machine.profile import OPTIONS
+
+    cases = test_each_option_is_used_only_when_declared.pytestmark[0].args[1]  # type: ignore[attr-defined]
+    assert {option for option, _ in cases} == set(OPTIONS)
