@@ -432,3 +432,20 @@ def test_every_option_has_its_case() -> None:
 
     cases = test_each_option_is_used_only_when_declared.pytestmark[0].args[1]  # type: ignore[attr-defined]
     assert {option for option, _ in cases} == set(OPTIONS)
+
+
+def test_rotary_plan_refuses_a_program_too_large(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """``rotary plan`` writes one program (its number + 1 is the work-offset update's):
+    larger than ``program_size``, it is refused, not split."""
+    spec_with(tmp_path, "program_size = 2000")
+    text = (REPO / "samples/rotary/m4.toml").read_text(encoding="utf-8").replace(
+        '"../machines/vmc-fanuc.toml"', f'"{(tmp_path / "machine.toml").as_posix()}"')
+    spec = tmp_path / "m4.toml"
+    spec.write_text(text, encoding="utf-8")
+    argv = ["rotary", "plan", str(spec), "-o", str(tmp_path / "out")]
+    assert main(argv) == UnsupportedError.exit_code
+    assert re.search(r"the program is \d+ bytes, expected at most 2000 \(.*machine.toml: "
+                     r"controller.program_size\), and this command writes one program",
+                     capsys.readouterr().err)
+    assert not (tmp_path / "out").exists()

@@ -56,6 +56,7 @@ def add_rotary_commands(sub: Any) -> None:
 
 def _plan(args: argparse.Namespace) -> int:
     from probegen.dialects import get_dialect
+    from probegen.dialects.split import fit
     from probegen.planning.rotary import plan_rotary
     from probegen.planning.rotary_spec import load_rotary_spec
 
@@ -63,7 +64,7 @@ def _plan(args: argparse.Namespace) -> int:
     spec.machine.check_program_number(spec.program_number, f"{spec.source}: program.number")
     plan = plan_rotary(spec)
     dialect = get_dialect(args.dialect)
-    text = dialect.generate(plan.program)
+    text = fit(dialect, plan.program, splits=False).main  # O<n+1> is the offset update's
     if args.output == "-":
         sys.stdout.write(text)
         return ExitCode.OK

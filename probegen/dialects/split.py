@@ -80,8 +80,8 @@ def size(text: str) -> int:
     return len(text.encode("ascii", "replace"))
 
 
-def fit(dialect: Dialect, program: ir.Program, library: Mapping[str, str] | None = None
-        ) -> Fitted:
+def fit(dialect: Dialect, program: ir.Program, library: Mapping[str, str] | None = None,
+        splits: bool = True) -> Fitted:
     """The program, split when it is larger than ``program_size``; the whole checked
     against ``program_memory``.
 
@@ -89,6 +89,8 @@ def fit(dialect: Dialect, program: ir.Program, library: Mapping[str, str] | None
         dialect: the dialect writing it (its ``compact`` form is kept in every part).
         program: the planned program.
         library: the macro library files written with it (counted in the memory).
+        splits: whether the caller writes a split program's parts (a command that writes
+            one program only refuses a program larger than ``program_size``).
 
     Raises:
         UnsupportedError: a part would still be too large (one feature alone), no cut is
@@ -101,10 +103,13 @@ def fit(dialect: Dialect, program: ir.Program, library: Mapping[str, str] | None
     if not dialect.PROFILE_LIMITS or not limit or size(whole) <= limit:
         fitted = Fitted(whole)
     else:
-        if not isinstance(dialect, Fanuc):
-            raise UnsupportedError(f"dialect {dialect.NAME!r} cannot split a program: the "
-                                   f"program is {size(whole)} bytes, expected at most "
-                                   f"{limit} ({s.limits_source}: controller.program_size)")
+        if not isinstance(dialect, Fanuc) or not splits:
+            why = "this command writes one program" if splits is False else \
+                f"dialect {dialect.NAME!r} cannot split a program"
+            raise UnsupportedError(f"dialect {dialect.NAME!r}: the program is {size(whole)} "
+                                   f"bytes, expected at most {limit} ({s.limits_source}: "
+                                   f"controller.program_size), and {why}; raise "
+                                   "program_size if the control takes it")
         fitted = split(dialect, program, size(whole))
     check_memory(dialect, s, fitted, library or {})
     return fitted
