@@ -104,8 +104,8 @@ def fit(dialect: Dialect, program: ir.Program, library: Mapping[str, str] | None
         fitted = Fitted(whole)
     else:
         if not isinstance(dialect, Fanuc) or not splits:
-            why = "this command writes one program" if splits is False else \
-                f"dialect {dialect.NAME!r} cannot split a program"
+            why = ("this command writes one program" if not splits
+                   else f"dialect {dialect.NAME!r} cannot split a program")
             raise UnsupportedError(f"dialect {dialect.NAME!r}: the program is {size(whole)} "
                                    f"bytes, expected at most {limit} ({s.limits_source}: "
                                    f"controller.program_size), and {why}; raise "
