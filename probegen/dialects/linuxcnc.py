@@ -20,7 +20,9 @@ reference):
   touch leaves a log without ``ERR NOTOUCH`` and without ``PGEND`` (an incomplete log).
 * ``RETRACT`` moves are ``G1`` back along the approach line.
 * A move to the point the previous move ended at is dropped (rs274ngc calls a probe
-  move that starts at its end point an error); it still counts in the move numbers of
+  move that starts within 0.254 mm of its end point an error), also across the
+  parameter settings and ``LOG`` lines between them (unless a setting changes a
+  parameter the point is written with); it still counts in the move numbers of
   ``ERR COLLISION``, which stay those of the Fanuc program.
 * Results are ``(LOG,...)`` lines in the line format of ``docs/dprnt-format.md``, the
   probe position printed as ``%.4f#5061`` (``%.5f`` in inch), so
@@ -174,13 +176,16 @@ class LinuxCnc(Dialect):
             block = self.move(node, self.owners[id(node)])
             self.position = node.target
             return block
-        self.position = None  # after a touch, where it tripped; after an Assign, maybe moved
+        if isinstance(node, ir.ReportCentre):
+            return self.centre(node)  # moves nothing, changes no value
+        if isinstance(node, ir.Assign):
+            if self.position is not None and node.name in {
+                    c.name for c in self.position if isinstance(c, ir.Var)}:
+                self.position = None  # the same words now name another point
+            return self.assign(node)
+        self.position = None  # after a touch, where it tripped
         if isinstance(node, ir.Touch):
             return self.touch(node)
-        if isinstance(node, ir.Assign):
-            return self.assign(node)
-        if isinstance(node, ir.ReportCentre):
-            return self.centre(node)
         if isinstance(node, ir.Check | ir.SetWorkOffset | ir.UpdateTool | ir.Align):
             raise UnsupportedError(f"dialect {self.NAME!r} cannot express {describe(node)}: "
                                    f"the in-process decisions are emitted for fanuc and haas "
