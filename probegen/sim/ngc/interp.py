@@ -317,11 +317,11 @@ class Interpreter:
             for letter, get, column in words:
                 self.column = column
                 values.append((letter, get()))
-            settings = []
-            for _, index, get, column in assigns:
+            settings: list[tuple[ast.Param | ast.Named, float, float, int]] = []
+            for target, number, get, column in assigns:
                 self.column = column
-                settings.append((index(), get()))
-            for (target, _, _, column), (index, value) in zip(assigns, settings, strict=True):
+                settings.append((target, number(), get(), column))
+            for target, index, value, column in settings:
                 self.column = column
                 if isinstance(target, ast.Named):
                     self.params.write_named(target.name, value)

@@ -210,7 +210,7 @@ class NgcMotion(Motion):
         else:
             self.set_g92(self.g92_saved, True)
 
-    def g10(self, words: dict[str, tuple[float, bool]]) -> None:  # type: ignore[override]
+    def g10(self, words: dict[str, tuple[float, bool]]) -> None:
         """G10 L2 / L20 Pn (0: the current system; 1-9 G54-G59.3)."""
         line = round(words.get("L", (0.0, False))[0])
         number = round(words.get("P", (-1.0, False))[0])

@@ -2,12 +2,12 @@
 
 | parameters | meaning |
 |---|---|
-| ``#1``-``#30`` | subroutine locals: a call's arguments, the rest 0; the caller's come back on return |
+| ``#1``-``#30`` | subroutine locals: a call's arguments, the rest 0; restored on return |
 | ``#31``-``#5000`` | global, 0 until written |
 | ``#5061``-``#5070`` ... ``#5420``-``#5428`` | system parameters (:meth:`NgcMotion.read_param`) |
 | other numbers up to ``#5602`` | kept as written, 0 until then (``#5599`` is 1) |
 | ``#<name>`` | local to the subroutine that writes it; gone when it returns |
-| ``#<_name>`` | global; the predefined ones (``#<_x>``, ``#<_metric>``, ``#<_value>`` ...) read only |
+| ``#<_name>`` | global; predefined ones (``#<_x>``, ``#<_metric>``, ``#<_value>`` ...) read only |
 
 Reading a named parameter that does not exist is the interpreter's error ``Named
 parameter #<name> not defined``; a number outside 1-5602 is ``Parameter number out of
