@@ -147,7 +147,9 @@ class Standalone:
             elif isinstance(node, ir.Touch):
                 self.touch(node)
             elif isinstance(node, ir.Assign):
-                self.last = None
+                if self.last is not None and node.name in {
+                        c.name for c in self.last if isinstance(c, ir.Var)}:
+                    self.last = None  # the same words name another point now
                 self.values[node.name] = (self.value(node.a + node.offset) if node.b is None
                                           else (self.value(node.a) + self.value(node.b)) / 2)
             elif isinstance(node, ir.ReportCentre):
@@ -155,7 +157,9 @@ class Standalone:
         return self
 
     def move(self, node: ir.Move) -> None:
-        """A move; the dialect drops one to the same target as the move just before."""
+        """A move; the dialect drops one to the same target as the move just before
+        (rs274ngc refuses a probe move shorter than 0.254 mm), LOG lines and settings of
+        other parameters between them."""
         if node.target != self.last:
             feed = 0.0 if node.mode is ir.MoveMode.RAPID else self.setup.position_feed
             self.path.append((MOTION[node.mode], self.point(node.target), feed))

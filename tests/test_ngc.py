@@ -18,7 +18,7 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
-from test_linuxcnc import log_text, run_rs274, rs274  # noqa: F401
+from test_linuxcnc import log_text, rs274, run_rs274  # noqa: F401
 
 from probegen.errors import ProbegenError, ProgramParseError
 from probegen.machine.probe_model import ProbeModel
