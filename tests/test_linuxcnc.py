@@ -203,6 +203,27 @@ def test_rs274_runs_the_planned_path(in_repo: Path, rs274: str, tmp_path: Path,
 
 
 @pytest.mark.parametrize("spec_path", SPECS, ids=lambda p: p.stem)
+def test_rs274_runs_the_compact_program_as_the_inline_one(in_repo: Path, rs274: str,
+                                                          tmp_path: Path,
+                                                          spec_path: Path) -> None:
+    """``compile --compact``: rs274 finds ``o<pg_move>``/``o<pg_touch>`` in the folder it
+    runs in (as LinuxCNC does in ``[RS274NGC] SUBROUTINE_PATH``) and commands the inline
+    program's motions, feeds and LOG lines."""
+    program, inline_text = planned(spec_path)
+    d = get_dialect("linuxcnc")
+    d.compact = True
+    compact_text = d.generate(program)
+    for name, text in d.library_files(8000, 100, "mm").items():
+        (tmp_path / name).write_text(text, encoding="ascii")
+    (tmp_path / "inline").mkdir()
+    inline, compact = (run_rs274(rs274, inline_text, tmp_path / "inline"),
+                       run_rs274(rs274, compact_text, tmp_path))
+    assert inline.returncode == 0 and compact.returncode == 0, compact.output[-2000:]
+    assert motions(compact) == motions(inline) and len(motions(inline)) > 10
+    assert log_text(compact) == log_text(inline)
+
+
+@pytest.mark.parametrize("spec_path", SPECS, ids=lambda p: p.stem)
 def test_rs274_log_is_read_by_the_dprnt_reader(in_repo: Path, rs274: str, tmp_path: Path,
                                                spec_path: Path) -> None:
     program, text = planned(spec_path)

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO
+from conftest import REPO, assert_golden
 from test_closed_loop import LOBING as SPHERE_LOBING
 from test_closed_loop import OFFSET, expected_fit, program_text
 from test_haas_closed_loop import LOBING, WORK, oversize_bore_block, placed_part  # noqa: F401
@@ -146,3 +146,57 @@ def test_a_g92_offset_stops_the_program_before_it_moves(in_repo: Path) -> None:
     res = run_text(shifted, VirtualMachine(part, ProbeModel(3.0)), kind="ngc")
     assert res.alarm is not None and res.alarm.startswith("9301 G92/G52 OFFSET IS APPLIED")
     assert res.touches == 0 and res.output == ""
+
+
+# -- the compact form: o<pg_move>/o<pg_touch> calls to the macro library -----------------
+GOLDEN = REPO / "tests/golden/linuxcnc_library"
+
+
+def compact_forms(spec_path: Path) -> tuple[str, str]:
+    """The inline and the compact LinuxCNC program of a spec."""
+    program = plan_program(load_spec(spec_path), runtime_variables=True).program
+    d = get_dialect("linuxcnc")
+    inline = d.generate(program)
+    d.compact = True
+    return inline, d.generate(program)
+
+
+def test_compact_program_and_library_match_golden(in_repo: Path) -> None:
+    _, compact = compact_forms(Path("samples/sphere25/sphere_test.toml"))
+    assert_golden(GOLDEN / "sphere_test.compact.ngc", compact)
+    for name, text in get_dialect("linuxcnc").library_files(8000, 100, "mm").items():
+        assert_golden(GOLDEN / name, text)
+    assert "G38." not in compact and compact.count("o<pg_touch> call") == 31
+
+
+@pytest.mark.parametrize("spec_path", SPECS, ids=lambda p: p.stem)
+def test_compact_measures_as_inline(spec_path: Path, oversize_bore_block: cad.Model,  # noqa: F811
+                                    tmp_path: Path) -> None:
+    inline_text, compact_text = compact_forms(spec_path)
+    assert len(compact_text) < len(inline_text)
+    for name, text in get_dialect("linuxcnc").library_files(8000, 100, "mm").items():
+        (tmp_path / name).write_text(text, encoding="ascii")
+    spec = load_spec(spec_path)
+    part = placed_part(spec, oversize_bore_block)
+    ball = spec.machine.probe.ball_radius
+    inline, inline_touches = run(inline_text, part, ball, "ngc")
+    vm = VirtualMachine(part, ProbeModel(ball, LOBING))
+    compact = run_text(compact_text, vm, kind="ngc", work_offset=WORK, program_dir=tmp_path)
+    assert inline.alarm is None and compact.alarm is None, (inline.alarm, compact.alarm)
+    assert compact.touches == inline.touches > 0
+    assert np.array_equal(np.array([h.point for h in vm.touches]), inline_touches)
+    assert compact.output == inline.output and "PGEND" in compact.output
+
+
+def test_compact_unexpected_trigger_logs_and_aborts_as_inline(in_repo: Path,
+                                                             tmp_path: Path) -> None:
+    inline_text, compact_text = compact_forms(Path("samples/sphere25/sphere_test_iso.toml"))
+    for name, text in get_dialect("linuxcnc").library_files(8000, 100, "mm").items():
+        (tmp_path / name).write_text(text, encoding="ascii")
+    part = PlacedPart.from_spheres([[0.0, 0.0, 0.0], [0.0, 0.0, 40.0]], [12.5, 5.0])
+    inline = run_text(inline_text, VirtualMachine(part, ProbeModel(3.0)), kind="ngc")
+    compact = run_text(compact_text, VirtualMachine(part, ProbeModel(3.0)), kind="ngc",
+                       program_dir=tmp_path)
+    assert compact.output == inline.output and compact.output.endswith("ERR COLLISION SPH1 1\n")
+    assert inline.alarm is not None and compact.alarm is not None
+    assert compact.alarm.split(" (line")[0] == inline.alarm.split(" (line")[0]

@@ -221,14 +221,16 @@ def build_parser() -> argparse.ArgumentParser:
     form.add_argument("--compact", action="store_true",
                       help="Fanuc/Haas: call probegen's macro library (G65) for every skip "
                            "move and write the library beside the program (O8000.nc ...); "
-                           "the other dialects are written inline")
+                           "LinuxCNC: o<pg_move>/o<pg_touch> calls, pg_move.ngc ...; DMIS "
+                           "is written inline")
     form.add_argument("--inline", dest="compact", action="store_false",
                       help="every skip move spelt out in the program (the default)")
     c.set_defaults(func=_compile)
 
     mc = sub.add_parser("macros", help="write probegen's Macro B subprogram library (the "
                                        "programs a compile --compact program calls)")
-    mc.add_argument("-d", "--dialect", default="fanuc", help="fanuc or haas (default fanuc)")
+    mc.add_argument("-d", "--dialect", default="fanuc",
+                    help="fanuc, haas or linuxcnc (o-word subroutine files; default fanuc)")
     mc.add_argument("-o", "--output", default="out", help="output folder (default: out/)")
     mc.add_argument("--machine", help="machine profile (TOML): units, variable base and "
                                       "[controller] library_number (default: 8000, mm, #100)")
