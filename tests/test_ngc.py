@@ -183,6 +183,8 @@ def test_errors_stop_the_run_with_the_line(text: str, start: str) -> None:
     ("o2 endwhile\nM2\n", ":1:1:", "no open 'o2 while'"),
     ("o3 break\nM2\n", ":1:1:", "outside a loop"),
     ("O100\nM99\n", ":1:1:", "Fanuc-style program number"),
+    ("#1=" + "[" * 50 + "1" + "]" * 50 + "\n", ":1:44:", "nested at most 40 deep"),
+    ("#1=" + "#" * 50 + "1\n", ":1:45:", "nested at most 40 deep"),
 ])
 def test_syntax_errors_name_line_and_column(text: str, where: str, what: str) -> None:
     with pytest.raises(ProgramParseError) as info:

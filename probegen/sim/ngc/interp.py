@@ -128,6 +128,7 @@ class Interpreter:
         self.store = Store(self)  # type: ignore[arg-type]  # offsets only
         self.motion = NgcMotion(machine, self.store, settings)
         self.params = Parameters(self.motion, self.predefined)
+        self.modal_names = frozenset(self.motion.predefined())
         self.program_dir = program_dir
         self.block_delete = block_delete
         self.max_lines = max_lines
@@ -157,7 +158,7 @@ class Interpreter:
                "_line": float(self.line.number if self.line else 0)}
         if name in own:
             return own[name]
-        return self.motion.predefined().get(name) if name[1:2].isalpha() else None
+        return self.motion.predefined().get(name) if name in self.modal_names else None
 
     # -- the run loop -------------------------------------------------------------------
     def run(self) -> SimAlarm | None:

@@ -30,6 +30,7 @@ before anything runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from probegen.errors import Diagnostic, ProgramParseError
@@ -37,6 +38,8 @@ from probegen.sim.ngc import ast
 
 MAX_LINE = 256
 """Longest line LinuxCNC reads, characters."""
+MAX_NESTING = 40
+"""Deepest nesting of brackets, functions, parameter indirections and signs in a value."""
 MAX_SHOWN = 10
 """Diagnostics shown in the error message (all are kept in ``error.diagnostics``)."""
 WORD_LETTERS = frozenset("abcdfghijklmpqrstuvwxyz")
@@ -119,6 +122,7 @@ class _LineParser:
     def __init__(self, code: str) -> None:
         self.s = code
         self.i = 0
+        self.depth = 0
 
     # -- helpers --------------------------------------------------------------------
     def peek(self, k: int = 0) -> str:
@@ -179,7 +183,7 @@ class _LineParser:
             return ast.Param(self.bracketed())
         if ch == "#":
             self.i += 1
-            return ast.Param(self.parameter())
+            return ast.Param(self.nest(self.parameter))
         raise self.bad("a parameter number, '<name>' or '['")
 
     def bracketed(self) -> ast.Expr:
@@ -190,6 +194,19 @@ class _LineParser:
 
     def value(self) -> ast.Expr:
         """A real value: a number, ``[expr]``, ``#param``, a function, or one after a sign."""
+        return self.nest(self.nested_value)
+
+    def nest(self, read: Callable[[], ast.Expr]) -> ast.Expr:
+        """``read()`` one level deeper (at most :data:`MAX_NESTING`)."""
+        if self.depth == MAX_NESTING:
+            raise self.bad(f"a value nested at most {MAX_NESTING} deep")
+        self.depth += 1
+        try:
+            return read()
+        finally:
+            self.depth -= 1
+
+    def nested_value(self) -> ast.Expr:
         ch = self.peek()
         if ch in "+-" and ch:
             self.i += 1
