@@ -150,6 +150,54 @@ M2
     assert len(vm.touches) == 1
 
 
+MODES = """G21 G90 G54
+(LOGOPEN,a.log)
+G0 X1 Y2 Z3
+G92 X0 Y0
+(LOG,%.3f#5210 #5211 #5212 #<_x> #<_y> #5420)
+G0 X1
+G92.2
+(LOG,%.3f#5210 #5211 #<_x>)
+G92.3
+(LOG,%.3f#5210 #5211 #<_x>)
+G92.1
+(LOG,%.3f#5210 #5211 #<_x>)
+G10 L2 P1 X10 R90
+G0 X5 Y0
+(LOG,%.3f#<_x> #<_y> #<_abs_x> #<_abs_y>)
+G10 L2 P1 R0 X0
+o<s> sub
+M73
+G91 G20
+G0 X1
+o<s> endsub
+o<s> call
+(LOG,%.3f#<_incremental> #<_metric> #<_abs_x>)
+#5161 = 7
+G28
+(LOG,%.3f#<_abs_x> #<_abs_y> #<_abs_z>)
+G55
+(LOG,%d#5220 #<_coord_system>)
+#5220 = 3
+(LOG,%d#5220 #<_coord_system>)
+M2
+"""
+
+
+def test_g92_rotation_modal_restore_g28_and_coordinate_systems() -> None:
+    """G92 and its .1 .2 .3 with #5210/#5211; a G54 turned 90 degrees about its origin
+    (10, 0); M73 gives the caller its G90 G21 back; G28 to #5161-; #5220 selects."""
+    machine = FreeMachine(record=True)
+    res = run_ngc(MODES, machine)
+    assert res.alarm is None
+    assert res.output.splitlines() == [
+        "1.000 1.000 2.000 0.000 0.000 0.000", "0.000 1.000 2.000", "1.000 1.000 1.000",
+        "0.000 0.000 2.000", "5.000 0.000 10.000 5.000", "0.000 1.000 35.400",
+        "7.000 0.000 0.000", "2 550", "3 560"]
+    assert [end for _, _, end in machine.moves] == [
+        (1.0, 2.0, 3.0), (2.0, 2.0, 3.0), (10.0, 5.0, 3.0), (35.4, 5.0, 3.0), (7.0, 0.0, 0.0)]
+
+
 @pytest.mark.parametrize(("text", "start"), [
     ("G0 X1\n#1 = #<nope>\nM2\n", "9300 Named parameter #<nope> not defined (line 2, column 1)"),
     ("G0 X1\n#1 = [1/0]\nM2\n", "9300 Attempt to divide by zero (line 2, column 1)"),
