@@ -200,3 +200,39 @@ def test_compact_unexpected_trigger_logs_and_aborts_as_inline(in_repo: Path,
     assert compact.output == inline.output and compact.output.endswith("ERR COLLISION SPH1 1\n")
     assert inline.alarm is not None and compact.alarm is not None
     assert compact.alarm.split(" (line")[0] == inline.alarm.split(" (line")[0]
+
+
+def test_cli_compile_compact_sim_and_macros(in_repo: Path, tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """compile --compact -d linuxcnc writes pg_move.ngc and pg_touch.ngc beside the
+    program; sim (by the .ngc name, or --control linuxcnc) finds them there or through
+    --library, and logs what the inline program logs; macros writes the same files."""
+    from probegen.cli.app import main
+    from probegen.errors import ExitCode
+
+    spec = "samples/sphere25/sphere_test.toml"
+    out, inline = tmp_path / "c", tmp_path / "i"
+    assert main(["compile", spec, "--compact", "-d", "linuxcnc", "-o", str(out)]) == 0
+    assert main(["compile", spec, "-d", "linuxcnc", "-o", str(inline)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["pg_move.ngc", "pg_touch.ngc",
+                                                        "sphere_test.ngc"]
+    assert sorted(p.name for p in inline.iterdir()) == ["sphere_test.ngc"]
+    logs = []
+    for folder in (out, inline):
+        logs.append(tmp_path / f"{folder.name}.log")
+        assert main(["sim", str(folder / "sphere_test.ngc"), "--spec", spec,
+                     "-o", str(logs[-1])]) == ExitCode.OK
+    assert logs[0].read_text() == logs[1].read_text() and "PGEND" in logs[0].read_text()
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    (alone / "p.txt").write_text((out / "sphere_test.ngc").read_text())
+    capsys.readouterr()
+    assert main(["sim", str(alone / "p.txt"), "--control", "linuxcnc", "--spec", spec,
+                 "-o", str(tmp_path / "x.log")]) == ExitCode.SIM_ALARM
+    assert "Unable to open file for subroutine o<pg_move>" in capsys.readouterr().err
+    assert main(["sim", str(alone / "p.txt"), "--control", "linuxcnc", "--library", str(out),
+                 "--spec", spec, "-o", str(tmp_path / "y.log")]) == ExitCode.OK
+    assert (tmp_path / "y.log").read_text() == logs[1].read_text()
+    assert main(["macros", "-d", "linuxcnc", "-o", str(tmp_path / "m")]) == 0
+    for name in ("pg_move.ngc", "pg_touch.ngc"):
+        assert (tmp_path / "m" / name).read_text() == (out / name).read_text()

@@ -107,7 +107,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         print(f"  control: {line}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
-        if result.alarm.startswith("76 "):
+        if result.alarm.startswith("76 ") or "Unable to open file for subroutine" in result.alarm:
             print(f"  a called subprogram is neither in the program nor in "
                   f"{args.library or Path(args.program).parent}/ (a compact program's macro "
                   f"library: probegen macros -d DIALECT -o DIR, then sim --library DIR)",
