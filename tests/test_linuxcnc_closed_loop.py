@@ -236,3 +236,28 @@ def test_cli_compile_compact_sim_and_macros(in_repo: Path, tmp_path: Path,
     assert main(["macros", "-d", "linuxcnc", "-o", str(tmp_path / "m")]) == 0
     for name in ("pg_move.ngc", "pg_touch.ngc"):
         assert (tmp_path / "m" / name).read_text() == (out / name).read_text()
+
+
+@pytest.mark.parametrize("name", ["m4", "pivot"])
+def test_rotary_programs_measure_as_the_fanuc_ones(name: str) -> None:
+    """The M4 rotary-axis programs (``G53 G0 B.. C..``, samples/rotary) on the five-axis
+    B/C machine with planted location errors and lobing: the Fanuc program's touches."""
+    from test_rotary_closed_loop import ERRORS, plan
+
+    from probegen.machine.kinematics import Machine, Topology
+    from probegen.machine.probe_model import Lobing
+
+    p = plan(name)
+    spec = p.spec
+    found = []
+    for dialect, kind in (("fanuc", "macrob"), ("linuxcnc", "ngc")):
+        vm = VirtualMachine(
+            PlacedPart.from_spheres([spec.sphere_centre], [spec.sphere_radius]),
+            ProbeModel(spec.machine.probe.ball_radius, Lobing(0.004, 0.0015)),
+            Machine(Topology.FIVE_AXIS_BC, ERRORS, spec.pivot_length))
+        res = run_text(get_dialect(dialect).generate(p.program), vm, kind=kind)
+        assert res.alarm is None, res.alarm
+        found.append((records(res.output), np.array([h.point for h in vm.touches])))
+    (fanuc, fanuc_touches), (ngc, ngc_touches) = found
+    assert ngc == fanuc and len(ngc) == len(ngc_touches) > 10
+    assert np.abs(ngc_touches - fanuc_touches).max() < TOUCH_TOL

@@ -22,6 +22,10 @@ cutter compensation, canned cycles, ``G38.4``/``G38.5``, inverse time ...) raise
 9010 (not supported by the virtual machine); a code LinuxCNC does not have is the
 interpreter's error ``Unknown g code used``.
 
+Rotary axes B and C (a five-axis B/C machine) turn as on the Macro B control
+(``Motion.turn``: ``G0``/``G1``/``G53`` with the linear axes still, C the shorter way);
+LinuxCNC's ``#5224``-style offsets of the coordinate system apply.
+
 Probing (``G38.2``, ``G38.3``): a straight move at the feed toward the point that stops
 where the probe trips.  ``#5061-#5063`` hold the trip point in the coordinate system of
 the move, ``#5070`` 1; without contact the end point and 0, and ``G38.2`` stops the
@@ -144,10 +148,13 @@ class NgcMotion(Motion):
             self.apply_offsets()
         words = {k: (v, False) for k, v in addr.items()}
         axes = self.axes(words, one_shot)
+        turns = self.rotary_words(words, one_shot)
+        if one_shot == MACHINE and turns:
+            self.turn(turns, axes, one_shot)
+            return
         if one_shot is not None:
             self.non_modal(one_shot, words, axes)
             return
-        turns = self.rotary_words(words, one_shot)
         if not axes and not turns:
             return
         mode = round(self.modal[1] * 10)
