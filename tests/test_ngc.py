@@ -11,6 +11,7 @@ centre stops with the ball centre 15.5 mm from it (exact).
 from __future__ import annotations
 
 import math
+import random
 from pathlib import Path
 
 import pytest
@@ -76,6 +77,20 @@ def test_log_text_is_what_rs274_writes(rs274: str, tmp_path: Path) -> None:  # n
     assert log_text(run_rs274(rs274, FORMATS, tmp_path)) == FORMATS_LOG
 
 
+@pytest.mark.parametrize(("expression", "logged"), [
+    ("FIX[COS[90]]", "-1"),            # long double: COS[90] is -2.5e-20 (rs274 2.9)
+    ("[0 EQ 0.00009]", "1"),           # TOLERANCE_EQUAL 1e-4 in LinuxCNC 2.9
+    ("[0 NE 0.0001]", "1"),
+    ("[0 LT 0.00002]", "1"),           # only EQ and NE have a tolerance
+    ("ATAN[FUP[-0.5]]/[-1]", "-180"),  # FUP keeps the sign of -0.0
+    ("[-5 MOD 3]", "1"),
+    ("-0.00004", "0"),                 # printed as 0 (within TOLERANCE_EQUAL), not -0
+])
+def test_values_as_rs274_computes_them(expression: str, logged: str) -> None:
+    res = run(f"(LOGOPEN,v.log)\n#1 = {expression}\n(LOG,%d#1)\nM2\n")
+    assert res.alarm is None and res.output == logged + "\n"
+
+
 SUBS = """%
 (a user's program: subroutines, named parameters, loops, messages)
 o<side> sub
@@ -123,9 +138,13 @@ def test_a_users_program_with_subs_loops_and_named_parameters() -> None:
     assert res.alarm is None and res.stopped == "M30"
     assert len(vm.touches) == 4
     lines = res.output.splitlines()
-    assert lines == [f"HIT {i + 1} X{15.5 * math.cos(math.radians(90 * i)):.4f} "
-                     f"Y{15.5 * math.sin(math.radians(90 * i)):.4f} R{90 * i:.4f}"
+    def log(v: float) -> str:  # LinuxCNC prints a value within 1e-4 of 0 as 0.0000
+        return f"{round(v, 6) + 0.0:.4f}"
+
+    assert lines == [f"HIT {i + 1} X{log(15.5 * math.cos(math.radians(90 * i)))} "
+                     f"Y{log(15.5 * math.sin(math.radians(90 * i)))} R{90 * i:.4f}"
                      for i in range(4)]
+    assert lines[3].startswith("HIT 4 X0.0000 ")  # not -0.0000: cos(270 deg) is -2e-15
     assert res.messages == ("done", "k=4 2")  # a format holds for the rest of the line
     assert res.variables[31] == 2.0
 
@@ -291,3 +310,40 @@ def _mutated(draw: st.DrawFn) -> str:
 @given(_mutated())
 def test_mutated_programs_run_or_fail_cleanly(text: str) -> None:
     _outcome(text)
+
+
+def _random_expression(rng: random.Random, depth: int = 0) -> str:
+    """A random rs274ngc expression of numbers, operators and functions."""
+    if depth > 2 or rng.random() < 0.3:
+        value = rng.choice([rng.randint(-9, 9), round(rng.uniform(-5.0, 5.0), 3)])
+        return str(value) if value >= 0 or rng.random() < 0.5 else f"[{value}]"
+    kind = rng.random()
+    if kind < 0.5:
+        op = rng.choice(["+", "-", "*", "/", "MOD", "**", "EQ", "NE", "GT", "GE", "LT", "LE",
+                         "AND", "OR", "XOR"])
+        return (f"[{_random_expression(rng, depth + 1)} {op} "
+                f"{_random_expression(rng, depth + 1)}]")
+    if kind < 0.9:
+        name = rng.choice(["ABS", "ACOS", "ASIN", "COS", "EXP", "FIX", "FUP", "LN", "ROUND",
+                           "SIN", "SQRT", "TAN"])
+        return f"{name}[{_random_expression(rng, depth + 1)}]"
+    return f"ATAN[{_random_expression(rng, depth + 1)}]/[{_random_expression(rng, depth + 1)}]"
+
+
+def test_random_expressions_agree_with_rs274(rs274: str, tmp_path: Path) -> None:  # noqa: F811
+    """200 random expressions that the virtual control evaluates without an error give
+    rs274's values (printed with %.6f; 1e-9 relative for the last digit's rounding)."""
+    rng = random.Random(19)
+    kept: list[str] = []
+    while len(kept) < 200:
+        expression = _random_expression(rng)
+        line = f"#1 = {expression}\n(LOG,%.6f#1)\n"
+        res = run(f"(LOGOPEN,e.log)\n{line}M2\n")
+        if res.alarm is None and abs(float(res.output)) < 1e12:
+            kept.append(line)
+    text = "(LOGOPEN,e.log)\n" + "".join(kept) + "M2\n"
+    ours = run(text).output.split()
+    theirs = log_text(run_rs274(rs274, text, tmp_path)).split()
+    assert len(theirs) == len(ours) == 200
+    for line, a, b in zip(kept, ours, theirs, strict=True):
+        assert float(a) == pytest.approx(float(b), rel=1e-9, abs=1e-6), line
