@@ -147,7 +147,9 @@ class Standalone:
             elif isinstance(node, ir.Touch):
                 self.touch(node)
             elif isinstance(node, ir.Assign):
-                self.last = None
+                if self.last is not None and node.name in {
+                        c.name for c in self.last if isinstance(c, ir.Var)}:
+                    self.last = None  # the same words name another point now
                 self.values[node.name] = (self.value(node.a + node.offset) if node.b is None
                                           else (self.value(node.a) + self.value(node.b)) / 2)
             elif isinstance(node, ir.ReportCentre):
@@ -155,7 +157,9 @@ class Standalone:
         return self
 
     def move(self, node: ir.Move) -> None:
-        """A move; the dialect drops one to the same target as the move just before."""
+        """A move; the dialect drops one to the same target as the move just before
+        (rs274ngc refuses a probe move shorter than 0.254 mm), LOG lines and settings of
+        other parameters between them."""
         if node.target != self.last:
             feed = 0.0 if node.mode is ir.MoveMode.RAPID else self.setup.position_feed
             self.path.append((MOTION[node.mode], self.point(node.target), feed))
@@ -196,6 +200,27 @@ def test_rs274_runs_the_planned_path(in_repo: Path, rs274: str, tmp_path: Path,
     for number, (got, want) in enumerate(zip(actual, expected, strict=True), start=1):
         assert_close(got[1], want[1], f"motion {number} ({got[0]})")
         assert got[2] == pytest.approx(want[2]), f"motion {number}: feed"
+
+
+@pytest.mark.parametrize("spec_path", SPECS, ids=lambda p: p.stem)
+def test_rs274_runs_the_compact_program_as_the_inline_one(in_repo: Path, rs274: str,
+                                                          tmp_path: Path,
+                                                          spec_path: Path) -> None:
+    """``compile --compact``: rs274 finds ``o<pg_move>``/``o<pg_touch>`` in the folder it
+    runs in (as LinuxCNC does in ``[RS274NGC] SUBROUTINE_PATH``) and commands the inline
+    program's motions, feeds and LOG lines."""
+    program, inline_text = planned(spec_path)
+    d = get_dialect("linuxcnc")
+    d.compact = True
+    compact_text = d.generate(program)
+    for name, text in d.library_files(8000, 100, "mm").items():
+        (tmp_path / name).write_text(text, encoding="ascii")
+    (tmp_path / "inline").mkdir()
+    inline, compact = (run_rs274(rs274, inline_text, tmp_path / "inline"),
+                       run_rs274(rs274, compact_text, tmp_path))
+    assert inline.returncode == 0 and compact.returncode == 0, compact.output[-2000:]
+    assert motions(compact) == motions(inline) and len(motions(inline)) > 10
+    assert log_text(compact) == log_text(inline)
 
 
 @pytest.mark.parametrize("spec_path", SPECS, ids=lambda p: p.stem)

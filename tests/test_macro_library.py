@@ -91,7 +91,7 @@ def test_library_follows_the_profile() -> None:
     assert "O7101(PROBEGEN TOUCH)" in text and "F#690" in text and "M99 P#692" in text
     assert "GE0.00020" in text  # the check sum in inch
     with pytest.raises(UnsupportedError, match="no macro library"):
-        get_dialect("linuxcnc").library_files(8000, 100, "mm")
+        get_dialect("dmis").library_files(8000, 100, "mm")
 
 
 def test_compact_program_matches_golden() -> None:

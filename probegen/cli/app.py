@@ -87,7 +87,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     from probegen.cli.progress import Bar
 
     text = _program_text(args.program)
-    probes = text.upper().count("G31") + text.upper().count("PTMEAS")
+    probes = sum(text.upper().count(word) for word in ("G31", "PTMEAS", "G38."))
     with Bar("simulating", probes, unit="touches") as bar:
         vm = VirtualMachine(placed, probe, kin, on_touch=bar)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
@@ -107,7 +107,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         print(f"  control: {line}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
-        if result.alarm.startswith("76 "):
+        if result.alarm.startswith("76 ") or "Unable to open file for subroutine" in result.alarm:
             print(f"  a called subprogram is neither in the program nor in "
                   f"{args.library or Path(args.program).parent}/ (a compact program's macro "
                   f"library: probegen macros -d DIALECT -o DIR, then sim --library DIR)",
@@ -141,7 +141,7 @@ def _program_text(path: str) -> str:
     without BOM, else Latin-1), a Macro B program as ASCII."""
     from probegen.sim.vm import program_kind
 
-    what = "the program to run (Macro B or DMIS)"
+    what = "the program to run (Macro B, LinuxCNC or DMIS)"
     if program_kind(path) == "dmis":
         from probegen.dmis.reader import read_dmis_text
 
@@ -221,14 +221,16 @@ def build_parser() -> argparse.ArgumentParser:
     form.add_argument("--compact", action="store_true",
                       help="Fanuc/Haas: call probegen's macro library (G65) for every skip "
                            "move and write the library beside the program (O8000.nc ...); "
-                           "the other dialects are written inline")
+                           "LinuxCNC: o<pg_move>/o<pg_touch> calls, pg_move.ngc ...; DMIS "
+                           "is written inline")
     form.add_argument("--inline", dest="compact", action="store_false",
                       help="every skip move spelt out in the program (the default)")
     c.set_defaults(func=_compile)
 
     mc = sub.add_parser("macros", help="write probegen's Macro B subprogram library (the "
                                        "programs a compile --compact program calls)")
-    mc.add_argument("-d", "--dialect", default="fanuc", help="fanuc or haas (default fanuc)")
+    mc.add_argument("-d", "--dialect", default="fanuc",
+                    help="fanuc, haas or linuxcnc (o-word subroutine files; default fanuc)")
     mc.add_argument("-o", "--output", default="out", help="output folder (default: out/)")
     mc.add_argument("--machine", help="machine profile (TOML): units, variable base and "
                                       "[controller] library_number (default: 8000, mm, #100)")
@@ -299,19 +301,22 @@ def build_parser() -> argparse.ArgumentParser:
     cp.set_defaults(func=_capture)
 
     sm = sub.add_parser("sim", help="run a program on the virtual machine")
-    sm.add_argument("program", help="program text: .nc (Macro B) or .dmi/.dms (DMIS)")
+    sm.add_argument("program", help="program text: .nc (Macro B), .ngc (LinuxCNC) or "
+                                    ".dmi/.dms (DMIS)")
     sm.add_argument("--spec", help="take the part and the machine profile from a spec")
     sm.add_argument("--part", help="the part model (STEP)")
     sm.add_argument("--machine", help="machine profile (TOML)")
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
-    sm.add_argument("--control", choices=tuple(CONTROLS),
-                    help="the Macro B control (default: haas for a .haas.nc file, else fanuc)")
+    sm.add_argument("--control", choices=(*CONTROLS, "linuxcnc"),
+                    help="the control (default: linuxcnc for a .ngc file, haas for a .haas.nc "
+                         "file, else fanuc); linuxcnc writes what the program's (LOG,...) "
+                         "comments log")
     sm.add_argument("--feed-override", type=positive, default=100.0, metavar="PCT",
                     help="the operator's feed override, percent (Macro B: G1 and G31 feeds, "
                          "except while #3004 holds it at 100)")
     sm.add_argument("--library", metavar="DIR",
-                    help="where called subprograms O<n>.nc are (a compact program's macro "
-                         "library; default: the program's folder)")
+                    help="where called subprograms O<n>.nc (LinuxCNC: <name>.ngc) are (a "
+                         "compact program's macro library; default: the program's folder)")
     sm.add_argument("--offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",

@@ -42,7 +42,7 @@ def _compile(args: argparse.Namespace) -> int:
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
-        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
+        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS: inline
         library = checked_library(dialect, spec.machine) if dialect.compact else {}
         fitted = fit(dialect, planned.program, library)
         check_part_numbers(fitted, spec, library)

@@ -20,7 +20,9 @@ reference):
   touch leaves a log without ``ERR NOTOUCH`` and without ``PGEND`` (an incomplete log).
 * ``RETRACT`` moves are ``G1`` back along the approach line.
 * A move to the point the previous move ended at is dropped (rs274ngc calls a probe
-  move that starts at its end point an error); it still counts in the move numbers of
+  move that starts within 0.254 mm of its end point an error), also across the
+  parameter settings and ``LOG`` lines between them (unless a setting changes a
+  parameter the point is written with); it still counts in the move numbers of
   ``ERR COLLISION``, which stay those of the Fanuc program.
 * Results are ``(LOG,...)`` lines in the line format of ``docs/dprnt-format.md``, the
   probe position printed as ``%.4f#5061`` (``%.5f`` in inch), so
@@ -31,6 +33,17 @@ reference):
   value plus the shift, written out: LinuxCNC's G10 L2 does not add in G91).
 * Run-time values are global named parameters ``#<_pg_name>``; ``variable_base`` is not
   used (numbered parameters would share the operator's ``#31-#5000``).
+* Compact form (``compact``, ``compile --compact``; the inline form is the default):
+  the protected move and the touch are subroutines in files of the macro library
+  (:data:`LIBRARY`, ``pg_move.ngc`` and ``pg_touch.ngc``, found by LinuxCNC in
+  ``[RS274NGC] SUBROUTINE_PATH`` or the program's folder), called ``o<pg_move> call [x]
+  [y] [z] [move]`` and ``o<pg_touch> call [x] [y] [z]``.  The main program sets the
+  feeds once (``#<_pg_mf>``, ``#<_pg_pf>``) and defines, per feature, a numbered
+  subroutine that logs ``ERR COLLISION <feature> <move>`` and aborts; it sets
+  ``#<_pg_err>`` to that number before the feature's moves and ``pg_move`` calls it
+  (``o[#<_pg_err>] call [move]``) when the probe tripped: a subroutine cannot print a
+  feature id (no strings), so the log and the stop are the inline program's.  The touch
+  keeps its stores and ``LOG`` line in the main program.
 """
 
 from __future__ import annotations
@@ -44,6 +57,27 @@ from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import feature_owners
 from probegen.errors import UnsupportedError
 from probegen.ir.actions import describe
+
+LIBRARY: dict[str, str] = {
+    "pg_move.ngc": """(PROBEGEN LIBRARY: PROTECTED MOVE - #1 #2 #3 TARGET, #4 MOVE NUMBER)
+(G38.3 AT #<_PG_MF>; A TRIP CALLS THE CALLER'S SUBROUTINE #<_PG_ERR> WITH THE MOVE)
+o<pg_move> sub
+G38.3 X#1 Y#2 Z#3 F#<_pg_mf>
+o1 if [#5070 EQ 1]
+o[#<_pg_err>] call [#4]
+o1 endif
+o<pg_move> endsub
+M2
+""",
+    "pg_touch.ngc": """(PROBEGEN LIBRARY: TOUCH - #1 #2 #3 END POINT)
+(G38.2 AT #<_PG_PF>: LINUXCNC STOPS THE PROGRAM IF THE PROBE NEVER TRIPS)
+o<pg_touch> sub
+G38.2 X#1 Y#2 Z#3 F#<_pg_pf>
+o<pg_touch> endsub
+M2
+""",
+}
+"""The LinuxCNC macro library: file name → text (the same for every profile)."""
 
 _ACTIVE_COMMENT = re.compile(
     r"\s*(MSG|DEBUG|PRINT|LOG|LOGOPEN|LOGAPPEND|LOGCLOSE|PROBEOPEN|PROBECLOSE|ABORT|PY)\b",
@@ -83,11 +117,22 @@ class LinuxCnc(Dialect):
     FEED_DECIMALS: ClassVar[dict[str, int]] = {"mm": 0, "inch": 1}
     """Decimals of F words, by program units."""
 
+    MACRO_LIBRARY: ClassVar[bool] = True
+
     def __init__(self) -> None:
         super().__init__()
         self.params: dict[str, str] = {}
         self.label = 1000
         self.position: ir.Point | None = None
+        self.errors: dict[str, int] = {}
+        self.error_of: str | None = None
+
+    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+        """The macro library (:data:`LIBRARY`): named subroutines, so ``first`` and
+        ``base`` do not apply, and the feeds come from the program in its units."""
+        for text in LIBRARY.values():
+            self.check_lines(text)
+        return dict(LIBRARY)
 
     # -- values -----------------------------------------------------------------
     def param(self, name: str) -> str:
@@ -147,12 +192,20 @@ class LinuxCnc(Dialect):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
+        self.errors, self.error_of = {}, None
         offset_check = self.next_label()
+        blocks = [self.block(n) for n in nodes]
+        library = None
+        if self.compact:
+            library = {"move_feed": self.feed(s.position_feed),
+                       "probe_feed": self.feed(s.probe_feed),
+                       "errors": [{"label": label, "feature": feature}
+                                  for feature, label in self.errors.items()]}
         return {
             "s": s, "units_code": self.UNITS_CODE[s.units],
             "reset": " ".join(["G90", *self.reset_codes(self.reset_block(s)),
                                self.PATH_MODE]),
-            "offset_check": offset_check, "blocks": [self.block(n) for n in nodes],
+            "offset_check": offset_check, "blocks": blocks, "library": library,
             "ball": self.length(s.ball_diameter), "clearance": self.length(s.clearance_z),
             "name": self.comment(s.program_name),
             "log": self.LOG_FILE.format(number=s.program_number),
@@ -174,13 +227,16 @@ class LinuxCnc(Dialect):
             block = self.move(node, self.owners[id(node)])
             self.position = node.target
             return block
-        self.position = None  # after a touch, where it tripped; after an Assign, maybe moved
+        if isinstance(node, ir.ReportCentre):
+            return self.centre(node)  # moves nothing, changes no value
+        if isinstance(node, ir.Assign):
+            if self.position is not None and node.name in {
+                    c.name for c in self.position if isinstance(c, ir.Var)}:
+                self.position = None  # the same words now name another point
+            return self.assign(node)
+        self.position = None  # after a touch, where it tripped
         if isinstance(node, ir.Touch):
             return self.touch(node)
-        if isinstance(node, ir.Assign):
-            return self.assign(node)
-        if isinstance(node, ir.ReportCentre):
-            return self.centre(node)
         if isinstance(node, ir.Check | ir.SetWorkOffset | ir.UpdateTool | ir.Align):
             raise UnsupportedError(f"dialect {self.NAME!r} cannot express {describe(node)}: "
                                    f"the in-process decisions are emitted for fanuc and haas "
@@ -207,8 +263,22 @@ class LinuxCnc(Dialect):
             return {"kind": "rapid", "xyz": xyz}
         if node.mode is ir.MoveMode.RETRACT:
             return {"kind": "retract", "xyz": xyz, "f": f}
+        if self.compact:
+            return {"kind": "call_move", "args": [*map(bracketed, xyz),
+                                                  f"[{self.moves[feature]}]"],
+                    "error": self.error_label(feature)}
         return {"kind": "protected", "xyz": xyz, "f": f, "feature": feature,
                 "index": self.moves[feature], "label": self.next_label()}
+
+    def error_label(self, feature: str) -> int | None:
+        """The number of ``feature``'s error subroutine when ``#<_pg_err>`` must be set
+        to it (the first move of a feature), else None."""
+        if feature not in self.errors:
+            self.errors[feature] = self.next_label()
+        if self.error_of == feature:
+            return None
+        self.error_of = feature
+        return self.errors[feature]
 
     def touch(self, node: ir.Touch) -> dict[str, Any]:
         k = self.setup.ball_diameter / 2.0 - node.overtravel
@@ -216,7 +286,8 @@ class LinuxCnc(Dialect):
         stores = [f"{self.param(name)} = #{5061 + axis}"
                   for axis, name in enumerate(node.store) if name is not None]
         point: ir.Point = (end[0], end[1], end[2])
-        return {"kind": "touch", "xyz": [self.expr(c) for c in self.commanded(point)],
+        return {"kind": "call_touch" if self.compact else "touch",
+                "xyz": [self.expr(c) for c in self.commanded(point)],
                 "f": self.feed(self.setup.probe_feed), "stores": stores,
                 "tag": node.role.value, "feature": node.feature, "index": node.index,
                 "log": [self.log_number(f"#{5061 + axis}") for axis in range(3)]}
@@ -235,3 +306,8 @@ class LinuxCnc(Dialect):
                 raise self.unsupported(node, "LOG prints plain parameters only")
             log.append(self.log_number(self.param(c.name)))
         return {"kind": "centre", "feature": node.feature, "log": log}
+
+
+def bracketed(value: str) -> str:
+    """A word's value as a call argument: in brackets (``[19.5]``, ``[#<_pg_x>+2.]``)."""
+    return value if value.startswith("[") else f"[{value}]"

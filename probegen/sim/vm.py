@@ -242,25 +242,30 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
              work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
              feed_override: float = 100.0,
              program_dir: Path | None = None) -> SimResult:
-    """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
+    """Run program text (``kind`` ``"macrob"``, ``"ngc"`` or ``"dmis"``) on ``vm``.
 
     Args:
         text: the program.
         vm: the machine, with the part placed in machine coordinates.
-        kind: ``"macrob"`` or ``"dmis"``.
+        kind: ``"macrob"`` (Fanuc Macro B), ``"ngc"`` (LinuxCNC rs274ngc: the output is
+            what its ``(LOG,...)`` comments wrote) or ``"dmis"``.
         source: the file name for messages.
         tool: the probe's tool number (its length offset is set to 0).
         home: where the ball centre is when the program starts (machine coordinates).
-        work_offset: the G54 offset the control holds (Macro B only), mm.
+        work_offset: the G54 offset the control holds (Macro B and LinuxCNC), mm.
         control: the Macro B control the machine has, a key of
-            ``sim.macrob.base.CONTROLS`` (``"fanuc"``, ``"haas"``; see
-            :func:`program_control`).
+            ``sim.macrob.base.CONTROLS`` (``"fanuc"``, ``"haas"``), or ``"linuxcnc"``
+            (the text runs as ``kind="ngc"``; see :func:`program_control`).
         feed_override: the operator's feed override, percent (Macro B only: scales G1
             and G31 feeds while ``#3004`` does not hold it; the virtual clock).
         program_dir: where called subprograms ``O<n>.nc`` are looked for (a compact
             program's macro library); a subprogram found neither in the text nor there
-            stops the run with alarm 76 naming it.
+            stops the run with alarm 76 naming it.  LinuxCNC: where ``o<name> call``
+            finds ``<name>.ngc``.
     """
+    if kind == "ngc" or control == "linuxcnc":
+        return _run_ngc(text, vm, source=source, home=home, work_offset=work_offset,
+                        feed_override=feed_override, program_dir=program_dir)
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
 
@@ -279,6 +284,20 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"
     return SimResult(res.output, alarm, len(vm.touches), res.variables, res.rotation)
+
+
+def _run_ngc(text: str, vm: VirtualMachine, *, source: str, home: Vec3, work_offset: Vec3,
+             feed_override: float, program_dir: Path | None) -> SimResult:
+    """Run rs274ngc text on the LinuxCNC control (``sim.ngc``); G54 holds ``work_offset``."""
+    from probegen.sim.macrob.base import Settings
+    from probegen.sim.ngc.interp import run_ngc
+
+    res = run_ngc(text, vm, source=source, program_dir=program_dir,
+                  parameters={5221: work_offset[0], 5222: work_offset[1],
+                              5223: work_offset[2]},
+                  settings=Settings(home=home, feed_override=feed_override))
+    alarm = None if res.alarm is None else str(res.alarm)
+    return SimResult(res.output, alarm, len(vm.touches), res.variables)
 
 
 _TOOL_KINDS = ("H wear", "H geometry", "D wear", "D geometry")
@@ -316,11 +335,19 @@ def _alarm_text(a: SimAlarm) -> str:
 
 
 def program_kind(path: str | Path) -> str:
-    """``"dmis"`` for .dmi/.dms/.dmis files, else ``"macrob"``."""
-    return "dmis" if Path(path).suffix.lower() in (".dmi", ".dms", ".dmis") else "macrob"
+    """``"dmis"`` for .dmi/.dms/.dmis files, ``"ngc"`` for LinuxCNC's .ngc, else
+    ``"macrob"``."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".ngc":
+        return "ngc"
+    return "dmis" if suffix in (".dmi", ".dms", ".dmis") else "macrob"
 
 
 def program_control(path: str | Path) -> str:
-    """The control a Macro B program file is for, by its name: ``"haas"`` for the Haas
-    dialect's ``.haas.nc``, else ``"fanuc"`` (``probegen sim --control`` overrides)."""
-    return "haas" if Path(path).name.lower().endswith(".haas.nc") else "fanuc"
+    """The control a program file is for, by its name: ``"linuxcnc"`` for ``.ngc``,
+    ``"haas"`` for the Haas dialect's ``.haas.nc``, else ``"fanuc"`` (``probegen sim
+    --control`` overrides)."""
+    name = Path(path).name.lower()
+    if name.endswith(".ngc"):
+        return "linuxcnc"
+    return "haas" if name.endswith(".haas.nc") else "fanuc"

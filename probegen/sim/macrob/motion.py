@@ -378,8 +378,9 @@ class Motion:
             self.rapid(start, stop)
         self.position, self.work = stop, end
 
-    def skip(self, start: Point, stop: Point, feed: float, end: list[float]) -> None:
-        """G31: move until the skip signal; record the skip point (#5061-#5063)."""
+    def skip(self, start: Point, stop: Point, feed: float, end: list[float]) -> bool:
+        """G31: move until the skip signal; record the skip point (#5061-#5063).
+        Return whether the signal came (the LinuxCNC control's ``#5070``)."""
         hit = self.machine.skip(start, stop, feed)
         if hit is None:
             self.position, self.work = stop, end
@@ -387,6 +388,7 @@ class Motion:
             self.position = (float(hit[0]), float(hit[1]), float(hit[2]))
             self.work = self.to_work(self.position)
         self.skip_point = (self.work[0], self.work[1], self.work[2])
+        return hit is not None
 
     def rapid(self, start: Point, stop: Point) -> None:
         """A rapid move (skipped when it goes nowhere) on the virtual clock."""
