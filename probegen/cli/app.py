@@ -37,7 +37,7 @@ from probegen.cli.results import (
     add_identity_options,
     add_log_options,
 )
-from probegen.errors import ExitCode, ProbegenError
+from probegen.errors import ExitCode, ModelWarning, ProbegenError
 from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
 from probegen.sim.macrob.base import CONTROLS
@@ -490,9 +490,11 @@ def _inputs(args: argparse.Namespace) -> list[str]:
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
                       lineno: int, file: Any = None, line: str | None = None) -> None:
     """A Python warning (numpy's, a library's) as one line, without the source line that
-    looks like part of a traceback (``--debug`` shows warnings as Python prints them)."""
+    looks like part of a traceback (``--debug`` shows warnings as Python prints them);
+    probegen's own (:class:`~probegen.errors.ModelWarning`) without the class name."""
     text = " ".join(str(message).split())
-    print(f"probegen: warning: {category.__name__}: {text}", file=sys.stderr)
+    kind = "" if issubclass(category, ModelWarning) else f"{category.__name__}: "
+    print(f"probegen: warning: {kind}{text}", file=sys.stderr)
 
 
 def _traceback(debug: bool) -> None:
