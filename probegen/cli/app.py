@@ -234,6 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
                                       "[controller] library_number (default: 8000, mm, #100)")
     mc.set_defaults(func=_macros)
 
+    from probegen.cli.init import add_init_command
+
+    add_init_command(sub)
     f = sub.add_parser("features", help="list the faces of a STEP model")
     f.add_argument("model", help="STEP file")
     f.add_argument("--revolved", action="store_true",
@@ -248,6 +251,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="plan every accessible revolved feature of the model (default "
                          "sections, 8 points)")
     pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
+    pl.add_argument("-d", "--dialect", action="append",
+                    help="with -o: dialect of a program to write (repeatable; default: the "
+                         f"spec's or the profile's): {dialect_help()}")
+    pl.add_argument("-o", "--output",
+                    help="also write the planned program, one per dialect, into this folder "
+                         "(or file, for one dialect)")
     pl.set_defaults(func=_plan)
 
     s = sub.add_parser("sphere-points", help="show a point layout of the sphere probing "

@@ -155,10 +155,16 @@ def _features(args: argparse.Namespace) -> int:
 
 def _plan(args: argparse.Namespace) -> int:
     from probegen import ir
+    from probegen.dialects import get_dialect
     from probegen.planning import part_of, plan_program
     from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
     from probegen.spec.model import load_spec
 
+    if args.dialect and not args.output:
+        raise ProbegenError("plan -d: expected -o FOLDER to write the programs into, found "
+                            "none")
+    for name in args.dialect or ():
+        get_dialect(name)  # an unknown name is refused before the planning
     notes: tuple[str, ...] = ()
     part: Part | None
     if args.all_revolved:
@@ -202,7 +208,27 @@ def _plan(args: argparse.Namespace) -> int:
             print(f"rerouted: {r.spec.id}: {line}")
     for note in notes:
         print(f"note: {note}")
+    if args.output:
+        _write_programs(args, spec, part)
     return ExitCode.OK
+
+
+def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None) -> None:
+    """``plan -o``: the planned program in each dialect of ``-d`` (default: the spec's),
+    written as ``compile`` writes it (inline), into ``-o``."""
+    from probegen.dialects import get_dialect
+    from probegen.planning import plan_program
+
+    names = args.dialect or [spec.dialect]
+    spec.machine.check_program_number(spec.program_number, f"{args.input}: program number")
+    stem = Path(args.input).stem
+    for name in names:
+        dialect = get_dialect(name)
+        planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
+        target = _target(args.output, stem, dialect.EXTENSION, len(names))
+        write_file(target, dialect.generate(planned.program), f"the {name} program",
+                   encoding="ascii")
+        print(f"wrote {target}")
 
 
 def _sphere_points(args: argparse.Namespace) -> int:
