@@ -114,7 +114,26 @@ def test_plan_all_revolved_writes_the_programs(tmp_path: Path,
     assert out.startswith("feature  kind")  # the comparison table is kept
     for ext in ("nc", "dmi"):
         assert f"wrote {tmp_path / model.stem}.{ext}" in out
-        assert (tmp_path / f"{model.stem}.{ext}").is_file()
+    total = re.search(r"^total +\d+ +(\d+) ", out, re.M)
+    assert total is not None and int(total[1]) == 40  # FTC 11: 3 features, 40 touches
+    _runs_without_alarm(model, tmp_path / f"{model.stem}.nc", "macrob", 40)
+    _runs_without_alarm(model, tmp_path / f"{model.stem}.dmi", "dmis", 40)
+
+
+def _runs_without_alarm(model: Path, program: Path, kind: str, touches: int) -> None:
+    """The program on the virtual machine (Macro B) or CMM (DMIS), the part at its
+    nominal place and a perfect probe of the profile's ball: no alarm, every touch."""
+    from probegen import cad
+    from probegen.machine.probe_model import ProbeModel
+    from probegen.machine.profile import load_profile
+    from probegen.sim.contact import PlacedPart
+    from probegen.sim.vm import VirtualMachine, run_text
+
+    vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
+                        ProbeModel(load_profile(MACHINE).probe.ball_radius))
+    result = run_text(program.read_text(encoding="ascii"), vm, kind=kind)
+    assert result.alarm is None
+    assert result.touches == touches
 
 
 def test_plan_dialect_needs_output(in_repo: Path) -> None:
