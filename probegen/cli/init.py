@@ -35,6 +35,9 @@ def _init(args: argparse.Namespace) -> int:
     kinds = _counts(found)
     print(f"wrote {target}: {len(found.features)} features ({kinds}), "
           f"{len(found.left_out)} left out (listed at its end with the reason)")
+    if not found.features:
+        print(f"  no feature of {args.model} can be measured with this machine: a spec "
+              "needs one [[feature]] at least to compile; the list says why each is out")
     return ExitCode.OK
 
 

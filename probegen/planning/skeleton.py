@@ -271,8 +271,11 @@ def _compiles(part: Part, machine: MachineProfile, clearance: float, feature: Fe
     try:
         plan_program(spec, runtime_variables=True, part=part)
     except ProbegenError as exc:
+        from probegen.planning.left_out import collision_reason
+
         text = str(exc)
-        return text.split(": ", 2)[-1] if text.startswith(part.path) else text
+        return collision_reason(text.split(": ", 2)[-1] if text.startswith(part.path)
+                                else text)
     return ""
 
 
