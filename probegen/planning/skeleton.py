@@ -115,23 +115,21 @@ def _revolved_entry(part: Part, spec: RevolvedSpec) -> Entry:
 
 
 def revolved_title(f: Any) -> tuple[str, str]:
-    """What a recognised revolved feature is, with its nominal size, and a tolerance
-    table for it (``diameter``: ±0.05 mm, the tube's for a torus)."""
-    side = "bore" if f.inner else "boss"
-    size = f"D{2.0 * f.radius:.3f}"
+    """What a recognised revolved feature is, with its nominal size
+    (:func:`probegen.planning.left_out.describe`, a cylinder's length, a cone's half
+    angle), and a tolerance table for it (``diameter`` ±0.05 mm: the tube's of a torus)."""
+    from probegen.planning.left_out import describe
+
+    title = describe(f)
     if f.type == "cylinder":
-        title = f"{side} {size}, length {f.length:.3f}"
-        return title, "{ diameter = [-0.05, 0.05], position = 0.1, form = 0.05 }"
-    if f.type == "cone":
-        half = math.degrees(f.half_angle or 0.0)
-        return (f"{'inner' if f.inner else 'outer'} cone {size} at its origin, half angle "
-                f"{half:.3f} deg", "{ position = 0.1, angle = [-0.5, 0.5] }")
-    if f.type == "sphere":
-        return (f"{'inner' if f.inner else 'outer'} sphere {size}",
+        return (f"{title}, length {f.length:.3f}",
                 "{ diameter = [-0.05, 0.05], position = 0.1, form = 0.05 }")
-    tube = f"D{2.0 * (f.minor_radius or 0.0):.3f}"
-    return (f"torus {size}, tube {tube} ({'inner' if f.inner else 'outer'})",
-            "{ diameter = [-0.05, 0.05], position = 0.1 }")
+    if f.type == "cone":
+        return (f"{title} at its origin, half angle {math.degrees(f.half_angle or 0.0):.3f} "
+                "deg", "{ position = 0.1, angle = [-0.5, 0.5] }")
+    if f.type == "sphere":
+        return title, "{ diameter = [-0.05, 0.05], position = 0.1, form = 0.05 }"
+    return title, "{ diameter = [-0.05, 0.05], position = 0.1 }"
 
 
 # --------------------------------------------------------------------------- planes
