@@ -110,8 +110,8 @@ def _revolved_entry(part: Part, spec: RevolvedSpec) -> Entry:
     title, tolerance = revolved_title(f)
     faces = ",".join(map(str, f.faces))
     low, high = (f.centre_at(h)[2] for h in f.extent)
-    return Entry(spec, title, f"revolved feature {f.id}, faces {faces}, z {min(low, high):.3f}"
-                              f" to {max(low, high):.3f}", tolerance)
+    return Entry(spec, title, f"revolved feature {f.id}, faces {faces}, z "
+                              f"{_mm(min(low, high))} to {_mm(max(low, high))}", tolerance)
 
 
 def revolved_title(f: Any) -> tuple[str, str]:
@@ -160,7 +160,7 @@ def _plane(part: Part, machine: MachineProfile, clearance: float, face: Any) -> 
     offset = sum(a * b for a, b in zip(face.origin, n, strict=True))
     form = ", form = 0.05" if len(contacts) >= PLANE_CONTACTS else ""
     return Entry(spec, f"plane, {len(contacts)} contact{'s' if len(contacts) > 1 else ''}, "
-                       f"normal {_vec(n)}, {offset:.3f} mm from the origin",
+                       f"normal {_vec(n)}, {_mm(offset)} mm from the origin",
                  f"face {face.id}, area {face.area:.1f} mm2",
                  f"{{ position = [-0.05, 0.05]{form} }}")
 
@@ -277,8 +277,14 @@ def _compiles(part: Part, machine: MachineProfile, clearance: float, feature: Fe
     return ""
 
 
+def _mm(x: float) -> str:
+    """``x`` with 3 decimals, never ``-0.000``."""
+    text = f"{x:.3f}"
+    return "0.000" if text == "-0.000" else text
+
+
 def _vec(v: tuple[float, float, float]) -> str:
-    return "(" + ", ".join(f"{x:.3f}".replace("-0.000", "0.000") for x in v) + ")"
+    return "(" + ", ".join(_mm(x) for x in v) + ")"
 
 
 def _vec3(v: np.ndarray) -> tuple[float, float, float]:
