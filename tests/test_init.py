@@ -93,7 +93,7 @@ def test_init_needs_a_machine() -> None:
 @pytest.mark.skipif(not NIST, reason="no ../shared/ref/nist-step")
 @pytest.mark.parametrize("model", [*NIST, DCX], ids=lambda p: p.stem)
 def test_nist_skeleton_compiles_unchanged(model: Path, tmp_path: Path) -> None:
-    """The whole planner on every NIST model and the DCX part: about 15 min for all
+    """The whole planner on every NIST model and the DCX part: about 8 min for all
     twelve on the shared 2-core machine (CTC 2 and 4 the longest);
     benchmarks/bench_init.py prints the figures (docs/benchmarks.md)."""
     if not model.exists():
