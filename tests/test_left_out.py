@@ -21,8 +21,8 @@ from probegen import cad
 from probegen.cli.app import main
 from probegen.errors import ExitCode
 from probegen.machine.profile import load_profile
-from probegen.planning.left_out import header_comments, smallest_bore
-from probegen.planning.revolved_spec import all_revolved_spec
+from probegen.planning.left_out import header_comments
+from probegen.planning.revolved_spec import all_revolved_spec, smallest_bore
 
 MACHINE = REPO / "samples/machines/vmc-fanuc.toml"
 C, MIN, MAX = Align.CENTER, Align.MIN, Align.MAX

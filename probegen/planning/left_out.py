@@ -41,25 +41,12 @@ def describe(f: Any) -> str:
     return f"{'inner' if f.inner else 'outer'} {f.type} {size}"
 
 
-def smallest_bore(machine: MachineProfile) -> float:
-    """The smallest bore diameter the profile's stylus measures, mm: the ball, a retract
-    of at least 1.5 margins, and the safe circle of a small bore
-    (:func:`probegen.planning.revolved_spec._retracts`)."""
-    from probegen.planning.revolved_spec import (
-        FALLBACK_RETRACT,
-        LEAST_RETRACT,
-        SMALL_BORE_CORE,
-    )
-
-    low = LEAST_RETRACT * machine.margin
-    retract = min(low + SMALL_BORE_CORE, max(FALLBACK_RETRACT, low))
-    return 2.0 * (machine.probe.ball_radius + min(retract, machine.probe.approach))
-
-
-def revolved_left_out(f: Any, part: Part, machine: MachineProfile,
-                      problem: str) -> str:
+def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
+                      least: float) -> str:
     """The line of revolved feature ``f`` left out: ``problem`` is the recognition's
-    reason (not accessible) or the planner's message (it does not plan, or collides)."""
+    reason (not accessible) or the planner's message (it does not plan, or collides);
+    ``least`` the smallest bore diameter the stylus takes, mm
+    (:func:`probegen.planning.revolved_spec.smallest_bore`)."""
     ball = 2.0 * machine.probe.ball_radius
     head = f"R{f.id} {describe(f)} ({f.type}, faces {','.join(map(str, f.faces))})"
     reasons = []
@@ -72,22 +59,21 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile,
         reasons.append(f"axis ({f.axis[0]:.4f}, {f.axis[1]:.4f}, {f.axis[2]:.4f}) is "
                        f"{tilt:.1f} deg from Z, not along the probe: needs an orientation "
                        "or a setup")
-    least = smallest_bore(machine)
     if f.inner and f.type == "cylinder" and 2.0 * f.radius < least:
         reasons.append(f"bore D{2.0 * f.radius:.3f}: the stylus ball D{ball:.3f} needs "
                        f"D{least:.3f} or more: a smaller stylus")
     if reasons:
         return f"{head}: {'; '.join(reasons)}"
-    return f"{head}: {_planning_reason(f, part, machine, problem)}"
+    return f"{head}: {_planning_reason(f, part, machine, problem, least)}"
 
 
-def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str) -> str:
+def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
+                     least: float) -> str:
     """The reason of an accessible feature that does not plan or collides."""
     r, m = machine.probe.ball_radius, machine.margin
     if "closed above" in problem:
         return f"{_after(problem, 'closed above')}: reach it from below: needs a setup"
     if "expected R > r + d" in problem:
-        least = smallest_bore(machine)
         return (f"{describe(f)} is too small where it is measured: the stylus ball "
                 f"D{2.0 * r:.3f} needs D{least:.3f} or more: a smaller stylus")
     arcs = _ARCS.search(problem)

@@ -204,6 +204,15 @@ def _retracts(feature: RevolvedSpec, machine: MachineProfile,
     return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
 
 
+def smallest_bore(machine: MachineProfile) -> float:
+    """The smallest bore diameter the profile's stylus measures, mm: the ball and the
+    smallest retract :func:`_retracts` tries (at least 1.5 margins, and in a small bore
+    one that keeps a safe circle of :data:`SMALL_BORE_CORE`)."""
+    low = LEAST_RETRACT * machine.margin
+    retract = min(low + SMALL_BORE_CORE, max(FALLBACK_RETRACT, low), machine.probe.approach)
+    return 2.0 * (machine.probe.ball_radius + retract)
+
+
 ALTERNATIVE_SECTIONS = {
     "circle": ((0.25,), (0.75,)),
     "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
@@ -337,24 +346,25 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
 
     out: list[RevolvedSpec] = []
     notes: list[str] = []
+    least = smallest_bore(machine)
     for f in revolved_features(part):
         fid = f"R{f.id}"
         if f.type not in KIND_OF_TYPE or not f.accessible:
-            notes.append(revolved_left_out(f, part, machine, f.reason))
+            notes.append(revolved_left_out(f, part, machine, f.reason, least))
             continue
         spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}", _kind(f),
                             f.faces[0], None, None, 8, None)
         try:
             planned = plan_revolved(spec, part, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
-            notes.append(revolved_left_out(f, part, machine, str(exc)))
+            notes.append(revolved_left_out(f, part, machine, str(exc), least))
             continue
         if check:
             try:
                 check_alone(planned, part, machine, clearance_z)
             except CollisionError as exc:
                 notes.append(revolved_left_out(f, part, machine,
-                                               f"left out, it collides: {exc}"))
+                                               f"left out, it collides: {exc}", least))
                 continue
         out.append(spec)
     return tuple(out), tuple(notes)
