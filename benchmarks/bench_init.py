@@ -52,9 +52,12 @@ def run(model: Path, folder: Path) -> str:
     if code:
         return f"| {model.stem} | init failed: {out.getvalue().strip()[:80]} |"
     kinds = {"RevolvedSpec": 0, "PlanarSpec": 0, "FreeformSpec": 0}
+    left = sum(1 for line in spec.read_text().splitlines() if line.startswith("#   "))
+    if "\n[[feature]]\n" not in spec.read_text():  # nothing measurable: no spec to load
+        return f"| {model.stem} | 0 | 0 | 0 | 0 | {left} | no feature to compile | " \
+               f"{init_s:.1f} | - |"
     for f in load_spec(spec).features:
         kinds[type(f).__name__] += 1
-    left = sum(1 for line in spec.read_text().splitlines() if line.startswith("#   "))
     out = io.StringIO()
     start = time.perf_counter()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):

@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 _ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
 _HIT = re.compile(r"the stylus (ball|shank|holder)[^;]*?(?:into|of) face (\d+)")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
+LONGEST = 240
+"""A planner's message longer than this (characters) is cut (a free-form face lists
+every guide point it leaves out)."""
 HEADER_WIDTH = 72
 """Longest comment text of a program header line (the Fanuc block limit is 80)."""
 
@@ -101,7 +104,8 @@ def collision_reason(problem: str) -> str:
     it meets first, then the detail in brackets; the cleaned message otherwise."""
     hit = _HIT.search(problem)
     if hit is None:
-        return _clean(problem)
+        text = _clean(problem)
+        return text if len(text) <= LONGEST else text[:LONGEST - 5].rstrip() + " ..."
     return (f"no room: the stylus {hit[1]} meets face {hit[2]} (a smaller or longer stylus, "
             f"or another orientation) [{_detail(problem)}]")
 
