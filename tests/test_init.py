@@ -142,3 +142,19 @@ def test_plan_dialect_needs_output(in_repo: Path) -> None:
     code = main(["plan", "samples/bore_block/bore_block.step", "--all-revolved",
                  "--machine", "samples/machines/vmc-fanuc.toml", "-d", "dmis"])
     assert code == ExitCode.ERROR
+
+
+def test_a_model_with_nothing_measurable_says_so(tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """The M6 screw (build123d docs): every face too narrow for the 6 mm ball, facing
+    down or tilted: the skeleton has no feature, lists each one left out, and init says
+    that such a spec does not compile."""
+    model = SHARED / "ref/parts/build123d_m6x12_countersunk_screw.step"
+    if not model.exists():
+        pytest.skip("no ../shared/ref/parts")
+    text = _init(model, tmp_path / "screw.toml")
+    out = capsys.readouterr().out
+    assert "0 features (0 revolved, 0 planes, 0 free-form), 18 left out" in out
+    assert "a spec needs one [[feature]] at least to compile" in out
+    assert "[[feature]]\n" not in text
+    assert sum(line.startswith("#   ") for line in text.splitlines()) == 18
