@@ -75,21 +75,25 @@ def why_unsafe(note: str) -> str:
 
 def reason_of(note: str) -> str:
     """A short class of a left-out note."""
-    if "not parallel to Z" in note:
+    if "not along the probe" in note:
         return "axis not vertical"
     if "left out, it collides" in note:
         return "collides"
+    if "blind, depth" in note:
+        return "blind bore shallower than the ball"
+    if "faces down" in note:
+        return "no safe touch: faces down"
     if "no touch can be reached safely" in note:
         return "no safe touch: " + why_unsafe(note)
     if "closed above" in note:
         return "closed above"
     if "centre lies in material" in note:
         return "centre in material"
-    if "expected R > r + d" in note:
+    if "or more: a smaller stylus" in note:
         return "bore < ball + retract"
-    if "accessible arc longer" in note:
+    if "arc too short" in note:
         return "arc too short"
-    if "not accessible" in note:
+    if "no arc of the section" in note:
         return "not accessible (other)"
     return "does not plan (other)"
 

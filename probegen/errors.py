@@ -90,6 +90,12 @@ class ModelError(ProbegenError):
     exit_code = 3
 
 
+class ModelWarning(UserWarning):
+    """Something in the part model probegen ignores and the user should know of (a
+    colour or style entity that does not parse): the model loads without it.  The
+    command line prints it as one line, ``probegen: warning: <message>``."""
+
+
 class PlanningError(ProbegenError):
     """No safe measuring plan exists for the request."""
 

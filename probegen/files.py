@@ -275,13 +275,15 @@ def output_folder(path: str | os.PathLike[str], what: str) -> Path:
 
 
 def write_file(path: str | os.PathLike[str], data: str | bytes, what: str, *,
-               encoding: str = "utf-8") -> Path:
+               encoding: str = "utf-8", new: bool = False) -> Path:
     """Write ``data`` (text with ``\\n`` line ends in ``encoding``, or bytes) to the output
     file ``path`` under the module's policy, creating its folder; return the path.
+    ``new``: the file must not exist yet (a file the user edits, such as the spec
+    ``probegen init`` writes, is never overwritten).
 
     Raises:
         OutputError: ``path`` is a folder or one of the command's inputs, its folder
-            cannot be made, or the file cannot be written.
+            cannot be made, it exists and ``new`` is set, or the file cannot be written.
     """
     target = Path(path)
     if target.is_dir():
@@ -292,8 +294,12 @@ def write_file(path: str | os.PathLike[str], data: str | bytes, what: str, *,
     output_folder(target.parent, what)
     raw = data if isinstance(data, bytes) else data.encode(encoding)
     try:
-        with open(target, "wb") as handle:
+        with open(target, "xb" if new else "wb") as handle:
             handle.write(raw)
+    except FileExistsError:
+        raise OutputError(f"{target}: expected a new file for {what}, found an existing "
+                          "file (it is never overwritten: it may hold your edits); choose "
+                          "another -o or move it away") from None
     except OSError as exc:
         raise OutputError(f"{target}: cannot write {what}: {_reason(exc, target)}") from None
     return target

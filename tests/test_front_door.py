@@ -71,7 +71,7 @@ def test_every_leaf_command_is_found() -> None:
     assert ("rotary", "identify") in LEAVES and ("grating", "simulate") in LEAVES
     assert ("post-ingest",) in LEAVES and ("rotary",) not in LEAVES
     assert ("spc",) in LEAVES and ("export",) in LEAVES
-    assert len(LEAVES) == 20
+    assert len(LEAVES) == 21
 
 
 @pytest.mark.parametrize("path", command_paths(), ids=lambda p: " ".join(p) or "probegen")

@@ -103,6 +103,8 @@ class Model:
         bbox_min: lower corner of the box around the faces, mm (free curves and points
             a STEP file may carry for construction or PMI are left out).
         bbox_max: upper corner of that box, mm.
+        warnings: what was ignored while loading (a colour or style entity that does not
+            parse), one message each, in file order.
     """
 
     path: str
@@ -111,6 +113,7 @@ class Model:
     bbox_max: Vec3
     _shape: Shape = field(repr=False, compare=False)
     _topo_faces: tuple[TopoDS_Face, ...] = field(repr=False, compare=False)
+    warnings: tuple[str, ...] = ()
 
 
 # ---------------------------------------------------------------------- face records

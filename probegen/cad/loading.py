@@ -6,6 +6,12 @@ exists, so that a file that crashes OCCT ends in a :class:`~probegen.errors.Mode
 not a dead process; every reader status and entity check is turned into a clear
 message.  The child sends back the shape as BRep bytes and the face records built by
 :mod:`probegen.cad.faces`.
+
+A colour or style entity that does not parse (an unset field in a surface-style record,
+as Inventor and NX write them; a dangling style reference) does not refuse the file: the
+reader transfers geometry only, so such an entity is ignored and named in a
+:class:`~probegen.errors.ModelWarning` (``#id`` and STEP type).  Anything else that does
+not parse is a :class:`~probegen.errors.ModelError`.
 """
 
 from __future__ import annotations
@@ -17,8 +23,10 @@ import pickle
 import re
 import signal
 import traceback
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import NoReturn, cast
 
@@ -33,13 +41,22 @@ from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 
 from probegen.cad.faces import FaceRecord, Model, _record, _vec3
-from probegen.errors import ModelError
+from probegen.errors import ModelError, ModelWarning
 from probegen.files import note_input
 
 STEP_HEADER = "ISO-10303-21;"
 STEP_TERMINATOR = "END-ISO-10303-21;"
 
 _UNIT_ENTITY = re.compile(r"StepBasic_\w*Unit\w*")
+_PRESENTATION = re.compile(r"StepVisual_(?!\w*(?:Tessellated|Triangulated|Coordinates))\w+")
+"""OCCT's classes of colour, style, layer and annotation entities (presentation only:
+the tessellated geometry OCCT also keeps in ``StepVisual`` is not among them)."""
+_UNRESOLVED = re.compile(r"Unresolved Reference, Ent\.Id\.#(-?\d+)")
+_MISSING = re.compile(r"\(Id\.#(\d+)\)")
+_ENTITY_START = re.compile(rb"(?:^|;)\s*#(\d+)\s*=\s*(\(|[A-Za-z_][A-Za-z0-9_]*)", re.M)
+WARNINGS_SHOWN = 5
+"""At most this many ignored entities are warned of one by one; one more line counts
+the rest (all of them are in :attr:`Model.warnings`)."""
 
 
 # --------------------------------------------------------------------------- loading
@@ -56,7 +73,9 @@ def load_step(path: str | os.PathLike[str]) -> Model:
         path: the STEP file; messages quote it exactly as given.
 
     Returns:
-        The model, one :class:`FaceRecord` per face, in a stable face order.
+        The model, one :class:`FaceRecord` per face, in a stable face order; each
+        colour or style entity ignored is in ``warnings`` and is also issued as a
+        :class:`~probegen.errors.ModelWarning`.
 
     Raises:
         ModelError: the file is missing, empty, not STEP, truncated, corrupt, crashes
@@ -65,7 +84,7 @@ def load_step(path: str | os.PathLike[str]) -> Model:
     name = os.fspath(path)
     note_input(name)  # no output of the running command goes over the model
     _check_file(name)
-    brep, records = _isolated(name)
+    brep, records, ignored = _isolated(name)
     shape = TopoDS_Shape()
     BinTools.Read_s(shape, io.BytesIO(brep))
     faces = tuple(_unique_faces(shape))
@@ -73,7 +92,18 @@ def load_step(path: str | os.PathLike[str]) -> Model:
         raise RuntimeError(f"{name}: {len(records)} faces read, {len(faces)} after the copy")
     corners = np.array([(*r.bbox_min, *r.bbox_max) for r in records])
     lo, hi = _vec3(corners[:, :3].min(axis=0)), _vec3(corners[:, 3:].max(axis=0))
-    return Model(name, records, lo, hi, Compound(shape), faces)
+    _warn(ignored)
+    return Model(name, records, lo, hi, Compound(shape), faces, ignored)
+
+
+def _warn(ignored: tuple[str, ...]) -> None:
+    """Issue the first :data:`WARNINGS_SHOWN` of ``ignored`` as warnings, then a count."""
+    for text in ignored[:WARNINGS_SHOWN]:
+        warnings.warn(ModelWarning(text), stacklevel=3)
+    if len(ignored) > WARNINGS_SHOWN:
+        first = ignored[0].split(": ", 1)[0]
+        warnings.warn(ModelWarning(f"{first}: {len(ignored) - WARNINGS_SHOWN} more colour "
+                                   "or style entities ignored likewise"), stacklevel=3)
 
 
 def _check_file(name: str) -> None:
@@ -113,7 +143,7 @@ def _show(raw: bytes) -> str:
     return "".join(ch if " " <= ch <= "~" else f"\\x{ord(ch):02x}" for ch in raw.decode("latin-1"))
 
 
-_Loaded = tuple[bytes, tuple[FaceRecord, ...]]
+_Loaded = tuple[bytes, tuple[FaceRecord, ...], tuple[str, ...]]
 
 
 def _isolated(name: str) -> _Loaded:
@@ -156,8 +186,9 @@ def _isolated(name: str) -> _Loaded:
 
 
 def _load(name: str) -> _Loaded:
-    """Read and transfer the model; return its BRep bytes and its face records."""
-    shape = _read_shape(name)
+    """Read and transfer the model; return its BRep bytes, its face records and the
+    warnings of the colour or style entities ignored."""
+    shape, ignored = _read_shape(name)
     faces = _unique_faces(shape)
     if not faces:
         raise ModelError(f"{name}: empty shape: expected at least one face, found none")
@@ -169,7 +200,7 @@ def _load(name: str) -> _Loaded:
             _reraise_occt(f"{name}: face {index}", exc)
     brep = io.BytesIO()
     BinTools.Write_s(shape, brep)
-    return brep.getvalue(), tuple(records)
+    return brep.getvalue(), tuple(records), ignored
 
 
 def _reraise_occt(where: str, exc: Exception) -> NoReturn:
@@ -198,8 +229,9 @@ def _quiet_occt() -> Iterator[None]:
             messenger.AddPrinter(printer)
 
 
-def _read_shape(name: str) -> TopoDS_Shape:
-    """Run OCCT's STEP reader and check every status it returns."""
+def _read_shape(name: str) -> tuple[TopoDS_Shape, tuple[str, ...]]:
+    """Run OCCT's STEP reader and check every status it returns; the shape and the
+    warnings of :func:`_check_parsed`."""
     reader = STEPControl_Reader()
     reader.SetSystemLengthUnit(1.0)  # OCCT scales lengths to this unit: 1.0 = mm
     try:
@@ -210,7 +242,7 @@ def _read_shape(name: str) -> TopoDS_Shape:
                     f"{name}: the STEP reader failed ({status.name}): expected a readable "
                     "ISO-10303-21 exchange structure"
                 )
-            _check_parsed(name, reader)
+            ignored = _check_parsed(name, reader)
             if (roots := reader.NbRootsForTransfer()) == 0:
                 raise ModelError(
                     f"{name}: no shape to transfer: expected at least one product or shape "
@@ -227,34 +259,120 @@ def _read_shape(name: str) -> TopoDS_Shape:
         raise ModelError(
             f"{name}: transfer failed: expected a shape from {roots} root entities, found none"
         )
-    return shape
+    return shape, ignored
 
 
-def _check_parsed(name: str, reader: STEPControl_Reader) -> None:
-    """Refuse syntax errors, dangling ``#`` references and ill-typed parameters.
+def _check_parsed(name: str, reader: STEPControl_Reader) -> tuple[str, ...]:
+    """Refuse syntax errors, dangling ``#`` references and ill-typed parameters; return
+    a warning for each colour or style entity that fails (it is ignored).
 
     OCCT transfers such data regardless and crashes on the null reference left behind
     (seen with a deleted ORIENTED_EDGE and with ``(65)`` for ``(#65)``).  Failures on
     unit entities are let through: real files carry them (NIST CTC 2, 5 and FTC 9
-    write ``*`` for derived unit dimensions) and the reader falls back safely.
+    write ``*`` for derived unit dimensions) and the reader falls back safely.  Failures
+    on presentation entities (:data:`_PRESENTATION`: colours, styles, layers), and a
+    dangling reference from one, are warnings: the geometry reader never follows them
+    (the Prusa MINI heatsink, written by Inventor, has a style with an unset rendering
+    method).
     """
     model = reader.StepModel()
+    failed = _entity_failures(reader)
+    entities = _Entities.read(name, model.NbEntities()) if failed else None
+    ignored: dict[str, tuple[str, str]] = {}  # "#id" -> ("#id (TYPE)", the failure)
+    found: list[str] = []
+    for number, kind, fail in failed:
+        entity = _entity_name(entities, number, kind)
+        if _PRESENTATION.fullmatch(kind):
+            ignored[entity.split(" ", 1)[0]] = (entity, fail)
+        else:
+            found.append(f"DATA entity {entity}: {fail}")
     check = model.GlobalCheck()
-    found = [" ".join(check.CFail(i).split()) for i in range(1, check.NbFails() + 1)]
-    checks = reader.WS().ModelCheckList()
-    checks.Start()
-    while checks.More():
-        number = checks.Number()  # 0 is the global check, already counted
-        kind = model.Value(number).DynamicType().Name() if number > 0 else ""
-        if number > 0 and checks.Value().NbFails() and not _UNIT_ENTITY.fullmatch(kind):
-            found.append(f"DATA entity {number} ({kind}): {checks.Value().CFail(1)}")
-        checks.Next()
+    unresolved = []
+    for fail in (" ".join(check.CFail(i).split()) for i in range(1, check.NbFails() + 1)):
+        owners = _owners(fail, entities)
+        if owners and owners <= ignored.keys():
+            for owner in owners:  # the dangling #ref says more than OCCT's entity check
+                ignored[owner] = (ignored[owner][0], fail)
+        else:
+            unresolved.append(fail)
+    found[:0] = unresolved
     if found:
         raise ModelError(
             f"{name}: corrupt STEP data: expected every entity to parse, with every "
             "#reference resolved to an entity of the right type, found "
             f"{len(found)} error(s), the first: {found[0]}"
         )
+    return tuple(f"{name}: STEP entity {entity} ignored: a colour or style record that does "
+                 f"not parse ({fail}); the geometry does not depend on it"
+                 for entity, fail in ignored.values())
+
+
+def _entity_failures(reader: STEPControl_Reader) -> list[tuple[int, str, str]]:
+    """The entities that fail OCCT's check, but units: the reader's number, OCCT class
+    and first failure of each."""
+    model = reader.StepModel()
+    failed = []
+    checks = reader.WS().ModelCheckList()
+    checks.Start()
+    while checks.More():
+        number = checks.Number()  # 0 is the global check, read by the caller
+        kind = model.Value(number).DynamicType().Name() if number > 0 else ""
+        if number > 0 and checks.Value().NbFails() and not _UNIT_ENTITY.fullmatch(kind):
+            failed.append((number, kind, " ".join(checks.Value().CFail(1).split())))
+        checks.Next()
+    return failed
+
+
+@dataclass(frozen=True)
+class _Entities:
+    """The entity records of a file's DATA section in file order (OCCT numbers the
+    entities so): each one's ``#id``, STEP type (``"(complex)"`` for a complex entity)
+    and byte offset."""
+
+    data: bytes
+    ids: tuple[int, ...]
+    types: tuple[str, ...]
+    starts: tuple[int, ...]
+
+    @classmethod
+    def read(cls, name: str, count: int) -> _Entities | None:
+        """The records of ``name``; None when their count differs from ``count`` (the
+        reader's) and the reader's numbers cannot be matched to them."""
+        text = Path(name).read_bytes()
+        data = text[max(text.find(b"DATA;"), 0):]
+        found = list(_ENTITY_START.finditer(data))
+        if len(found) != count:
+            return None
+        return cls(data, tuple(int(m[1]) for m in found),
+                   tuple("(complex)" if m[2] == b"(" else m[2].decode().upper() for m in found),
+                   tuple(m.start(1) for m in found))
+
+    def referring(self, ident: int) -> set[str]:
+        """The ``#id`` of every entity whose record refers to ``#ident``."""
+        pattern = re.compile(rb"#%d(?![0-9])(?!\s*=)" % ident)
+        ends = (*self.starts[1:], len(self.data))
+        return {f"#{i}" for i, a, b in zip(self.ids, self.starts, ends, strict=True)
+                if pattern.search(self.data, a + 1, b)}
+
+
+def _owners(fail: str, entities: _Entities | None) -> set[str]:
+    """The ``#id`` of the entities an unresolved-reference failure is in: the one OCCT
+    names, or (a reference inside a list, which OCCT numbers negatively) every entity
+    that refers to the missing ``#id``; empty for any other failure."""
+    source, missing = _UNRESOLVED.search(fail), _MISSING.search(fail)
+    if source is None or missing is None or entities is None:
+        return set()
+    if not source[1].startswith("-"):
+        return {f"#{source[1]}"}
+    return entities.referring(int(missing[1]))
+
+
+def _entity_name(entities: _Entities | None, number: int, kind: str) -> str:
+    """``#id (TYPE)`` of the entity the reader numbers ``number``, or ``number (class)``
+    when the file's numbering is unknown."""
+    if entities is None:
+        return f"{number} ({kind})"
+    return f"#{entities.ids[number - 1]} ({entities.types[number - 1]})"
 
 
 def _unique_faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:

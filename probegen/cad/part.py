@@ -62,6 +62,11 @@ class Part:
         """Upper corner of the box around the faces, mm."""
         return self.model.bbox_max
 
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What was ignored while loading (:attr:`Model.warnings`)."""
+        return self.model.warnings
+
     @cached_property
     def exact(self) -> ExactFaces:
         """Exact queries on the trimmed faces (in-face test, distance, boundary, inside)."""

@@ -37,7 +37,7 @@ from probegen.cli.results import (
     add_identity_options,
     add_log_options,
 )
-from probegen.errors import ExitCode, ProbegenError
+from probegen.errors import ExitCode, ModelWarning, ProbegenError
 from probegen.files import inputs_protected, read_input, write_file
 from probegen.geometry.uncertainty import DECISION_RULES
 from probegen.sim.macrob.base import CONTROLS
@@ -236,6 +236,9 @@ def build_parser() -> argparse.ArgumentParser:
                                       "[controller] library_number (default: 8000, mm, #100)")
     mc.set_defaults(func=_macros)
 
+    from probegen.cli.init import add_init_command
+
+    add_init_command(sub)
     f = sub.add_parser("features", help="list the faces of a STEP model")
     f.add_argument("model", help="STEP file")
     f.add_argument("--revolved", action="store_true",
@@ -250,6 +253,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="plan every accessible revolved feature of the model (default "
                          "sections, 8 points)")
     pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
+    pl.add_argument("-d", "--dialect", action="append",
+                    help="with -o: dialect of a program to write (repeatable; default: the "
+                         f"spec's or the profile's): {dialect_help()}")
+    pl.add_argument("-o", "--output",
+                    help="also write the planned program, one per dialect, into this folder "
+                         "(or file, for one dialect)")
     pl.set_defaults(func=_plan)
 
     s = sub.add_parser("sphere-points", help="show a point layout of the sphere probing "
@@ -495,9 +504,11 @@ def _inputs(args: argparse.Namespace) -> list[str]:
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
                       lineno: int, file: Any = None, line: str | None = None) -> None:
     """A Python warning (numpy's, a library's) as one line, without the source line that
-    looks like part of a traceback (``--debug`` shows warnings as Python prints them)."""
+    looks like part of a traceback (``--debug`` shows warnings as Python prints them);
+    probegen's own (:class:`~probegen.errors.ModelWarning`) without the class name."""
     text = " ".join(str(message).split())
-    print(f"probegen: warning: {category.__name__}: {text}", file=sys.stderr)
+    kind = "" if issubclass(category, ModelWarning) else f"{category.__name__}: "
+    print(f"probegen: warning: {kind}{text}", file=sys.stderr)
 
 
 def _traceback(debug: bool) -> None:

@@ -206,10 +206,16 @@ def _features(args: argparse.Namespace) -> int:
 
 def _plan(args: argparse.Namespace) -> int:
     from probegen import ir
+    from probegen.dialects import get_dialect
     from probegen.planning import part_of, plan_program
     from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
     from probegen.spec.model import load_spec
 
+    if args.dialect and not args.output:
+        raise ProbegenError("plan -d: expected -o FOLDER to write the programs into, found "
+                            "none")
+    for name in args.dialect or ():
+        get_dialect(name)  # an unknown name is refused before the planning
     notes: tuple[str, ...] = ()
     part: Part | None
     if args.all_revolved:
@@ -247,13 +253,42 @@ def _plan(args: argparse.Namespace) -> int:
     print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
           f"clearance above the margin {planned.clearance.minimum:.3f} mm")
     if args.all_revolved and not planned.revolved:
-        print(f"no revolved feature of {args.input} can be measured safely: the notes say why")
+        print(f"no revolved feature of {args.input} can be measured safely: the list below "
+              "says why")
     for r in planned.revolved:
         for line in r.notes:
             print(f"rerouted: {r.spec.id}: {line}")
-    for note in notes:
-        print(f"note: {note}")
+    if notes:
+        print(f"left out ({len(notes)} recognised features; the reason and what would make "
+              "each measurable):")
+        for note in notes:
+            print(f"  {note}")
+    if args.output:
+        _write_programs(args, spec, part, notes)
     return ExitCode.OK
+
+
+def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
+                    left_out: tuple[str, ...]) -> None:
+    """``plan -o``: the planned program in each dialect of ``-d`` (default: the spec's),
+    written as ``compile`` writes it (inline), into ``-o``; the features left out are
+    listed with their reasons in a comment block at its head."""
+    from probegen import ir
+    from probegen.dialects import get_dialect
+    from probegen.planning import plan_program
+    from probegen.planning.left_out import header_comments
+
+    names = args.dialect or [spec.dialect]
+    spec.machine.check_program_number(spec.program_number, f"{args.input}: program number")
+    stem = Path(args.input).stem
+    for name in names:
+        dialect = get_dialect(name)
+        planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
+        program = planned.program
+        program = ir.Program(program.setup, (*header_comments(left_out), *program.body))
+        target = _target(args.output, stem, dialect.EXTENSION, len(names))
+        write_file(target, dialect.generate(program), f"the {name} program", encoding="ascii")
+        print(f"wrote {target}")
 
 
 def _sphere_points(args: argparse.Namespace) -> int:

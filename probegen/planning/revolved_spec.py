@@ -204,6 +204,15 @@ def _retracts(feature: RevolvedSpec, machine: MachineProfile,
     return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
 
 
+def smallest_bore(machine: MachineProfile) -> float:
+    """The smallest bore diameter the profile's stylus measures, mm: the ball and the
+    smallest retract :func:`_retracts` tries (at least 1.5 margins, and in a small bore
+    one that keeps a safe circle of :data:`SMALL_BORE_CORE`)."""
+    low = LEAST_RETRACT * machine.margin
+    retract = min(low + SMALL_BORE_CORE, max(FALLBACK_RETRACT, low), machine.probe.approach)
+    return 2.0 * (machine.probe.ball_radius + retract)
+
+
 ALTERNATIVE_SECTIONS = {
     "circle": ((0.25,), (0.75,)),
     "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
@@ -330,32 +339,32 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
                  check: bool = True) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
     """A spec feature for every accessible revolved feature of a part that plans
     (default sections, 8 points) and, with ``check``, whose moves clear the collision
-    check on their own (:func:`check_alone`); a note for each one left out."""
+    check on their own (:func:`check_alone`); a line for each one left out with the
+    reason (:func:`probegen.planning.left_out.revolved_left_out`)."""
     from probegen.cad.revolved import revolved_features
+    from probegen.planning.left_out import revolved_left_out
 
     out: list[RevolvedSpec] = []
     notes: list[str] = []
+    least = smallest_bore(machine)
     for f in revolved_features(part):
         fid = f"R{f.id}"
-        if f.type not in KIND_OF_TYPE:
-            notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not planned: a {f.type}")
-            continue
-        if not f.accessible:
-            notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not accessible: {f.reason}")
+        if f.type not in KIND_OF_TYPE or not f.accessible:
+            notes.append(revolved_left_out(f, part, machine, f.reason, least))
             continue
         spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}", _kind(f),
                             f.faces[0], None, None, 8, None)
         try:
             planned = plan_revolved(spec, part, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
-            notes.append(f"{fid} ({f.type}, faces {_faces(f)}): not planned: {exc}")
+            notes.append(revolved_left_out(f, part, machine, str(exc), least))
             continue
         if check:
             try:
                 check_alone(planned, part, machine, clearance_z)
             except CollisionError as exc:
-                notes.append(f"{fid} ({f.type}, faces {_faces(f)}): left out, it collides: "
-                             f"{exc}")
+                notes.append(revolved_left_out(f, part, machine,
+                                               f"left out, it collides: {exc}", least))
                 continue
         out.append(spec)
     return tuple(out), tuple(notes)
@@ -403,10 +412,6 @@ def _kind(f: Any) -> str:
     if f.type == "cylinder" and sum(s.reachable for s in f.sections) < 2:
         return "circle"
     return KIND_OF_TYPE[f.type]
-
-
-def _faces(f: Any) -> str:
-    return ",".join(str(k) for k in f.faces)
 
 
 def metrics_table(plans: tuple[RevolvedPlan, ...], machine: MachineProfile) -> str:

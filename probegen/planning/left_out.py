@@ -1,0 +1,174 @@
+"""Why a recognised feature is left out, in words the user can act on (issue 17, item 5).
+
+One line per feature: ``R12 bore D1.600 (cylinder, faces 34): bore D1.600: the stylus
+ball D6.000 needs D8.000 or more: a smaller stylus``.  The line names the feature (id,
+what it is with its nominal size, its type and faces), then the reason with its numbers
+and what would make it measurable (a smaller stylus, an orientation or a setup); where the
+planner's own message says more (a collision: the move, the stylus part and the face), it
+follows in brackets.  :func:`revolved_left_out` serves ``plan --all-revolved`` (the table
+and the program header) and ``probegen init`` (the skeleton's comments);
+:func:`header_comments` turns the lines into the comment block of a program header.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import TYPE_CHECKING, Any
+
+from probegen import ir
+from probegen.machine.profile import MachineProfile
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
+
+_ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
+_HIT = re.compile(r"the stylus (ball|shank|holder)[^;]*?(?:into|of) face (\d+)")
+_CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
+LONGEST = 240
+"""A planner's message longer than this (characters) is cut (a free-form face lists
+every guide point it leaves out)."""
+HEADER_WIDTH = 72
+"""Longest comment text of a program header line (the Fanuc block limit is 80)."""
+
+
+def describe(f: Any) -> str:
+    """What a recognised revolved feature is, with its nominal size: ``bore D10.000``,
+    ``boss D20.000``, ``inner cone D8.000``, ``outer sphere D25.000``, ``torus D35.000
+    tube D3.000``."""
+    size = f"D{2.0 * f.radius:.3f}"
+    if f.type == "cylinder":
+        return f"{'bore' if f.inner else 'boss'} {size}"
+    if f.type == "torus":
+        return f"torus {size} tube D{2.0 * (f.minor_radius or 0.0):.3f}"
+    return f"{'inner' if f.inner else 'outer'} {f.type} {size}"
+
+
+def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
+                      least: float) -> str:
+    """The line of revolved feature ``f`` left out: ``problem`` is the recognition's
+    reason (not accessible) or the planner's message (it does not plan, or collides);
+    ``least`` the smallest bore diameter the stylus takes, mm
+    (:func:`probegen.planning.revolved_spec.smallest_bore`)."""
+    ball = 2.0 * machine.probe.ball_radius
+    head = f"R{f.id} {describe(f)} ({f.type}, faces {','.join(map(str, f.faces))})"
+    reasons = []
+    if f.type not in ("cylinder", "cone", "sphere", "torus"):
+        reasons.append(f"a {f.type}: no spec kind measures it")
+    from probegen.cad.revolved_sections import VERTICAL
+
+    tilt = math.degrees(math.acos(min(1.0, abs(f.axis[2]))))
+    if math.hypot(f.axis[0], f.axis[1]) > VERTICAL:
+        reasons.append(f"axis ({f.axis[0]:.4f}, {f.axis[1]:.4f}, {f.axis[2]:.4f}) is "
+                       f"{tilt:.1f} deg from Z, not along the probe: needs an orientation "
+                       "or a setup")
+    if f.inner and f.type == "cylinder" and 2.0 * f.radius < least:
+        reasons.append(f"bore D{2.0 * f.radius:.3f}: the stylus ball D{ball:.3f} needs "
+                       f"D{least:.3f} or more: a smaller stylus")
+    if reasons:
+        return f"{head}: {'; '.join(reasons)}"
+    return f"{head}: {_planning_reason(f, part, machine, problem, least)}"
+
+
+def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
+                     least: float) -> str:
+    """The reason of an accessible feature that does not plan or collides."""
+    r, m = machine.probe.ball_radius, machine.margin
+    if "closed above" in problem:
+        return f"{_after(problem, 'closed above')}: reach it from below: needs a setup"
+    if "expected R > r + d" in problem:
+        return (f"{describe(f)} is too small where it is measured: the stylus ball "
+                f"D{2.0 * r:.3f} needs D{least:.3f} or more: a smaller stylus")
+    arcs = _ARCS.search(problem)
+    if arcs:
+        longest = max(float(a) for a in arcs[2].split(", "))
+        return (f"arc too short: the longest arc on the faces is {longest:.3f} mm, the "
+                f"ball D{2.0 * r:.3f} needs {2.0 * float(arcs[1]):.3f} mm: a smaller stylus")
+    if "no touch can be reached safely" in problem or "collides" in problem:
+        depth = _blind_depth(f, part)
+        if depth is not None and depth < r + m:
+            return (f"blind, depth {depth:.3f} mm: the ball reaches no section (it needs "
+                    f"{r + m:.3f} mm below one: radius {r:.3f} + margin {m:.3f}): a smaller "
+                    f"stylus [{_detail(problem)}]")
+        climbs = [float(b) > float(a) for a, b in _CLIMB.findall(problem)]
+        if climbs and all(climbs):
+            return ("faces down: every touch goes up, under material: needs an orientation "
+                    f"or a setup [{_detail(problem)}]")
+        if _HIT.search(problem):
+            return f"no touch can be reached safely: {collision_reason(problem)}"
+    return _clean(problem)
+
+
+def collision_reason(problem: str) -> str:
+    """A planner's or collision check's message as a reason: the stylus part and the face
+    it meets first, then the detail in brackets; the cleaned message otherwise."""
+    hit = _HIT.search(problem)
+    if hit is None:
+        text = _clean(problem)
+        return text if len(text) <= LONGEST else text[:LONGEST - 5].rstrip() + " ..."
+    return (f"no room: the stylus {hit[1]} meets face {hit[2]} (a smaller or longer stylus, "
+            f"or another orientation) [{_detail(problem)}]")
+
+
+def _blind_depth(f: Any, part: Part) -> float | None:
+    """The depth of a vertical bore closed at its bottom (material just below the lower
+    end on the axis), mm; None for anything else."""
+    if not (f.inner and f.type == "cylinder" and abs(f.axis[2]) > 1.0 - 1e-9):
+        return None
+    import numpy as np
+
+    ends = [np.asarray(f.centre_at(h)) for h in f.extent]
+    bottom = min(ends, key=lambda p: p[2])
+    below = bottom - np.array([0.0, 0.0, 0.05])
+    return f.length if part.exact.inside(below) else None
+
+
+def _after(text: str, word: str) -> str:
+    return text[text.index(word):]
+
+
+def _clean(problem: str) -> str:
+    """The planner's message without the file and feature prefixes it carries."""
+    text = re.sub(r"^.*?: revolved feature \d+: ", "", problem)
+    return re.sub(r"^feature R\d+: ", "", text)
+
+
+def _detail(problem: str) -> str:
+    """The planner's message, cleaned: its first item and how many more touches were
+    dropped."""
+    text = _clean(problem)
+    dropped = len(re.findall(r"touch(?:es)? [\d-]+ dropped", text))
+    first = text.split("; ", 1)[0]
+    return first + (f"; {dropped - 1} more touches dropped" if dropped > 1 else "")
+
+
+def header_comments(left_out: tuple[str, ...]) -> tuple[ir.Comment, ...]:
+    """The comment block of a program header listing the features left out: upper-case
+    ASCII, no parentheses (Fanuc comments cannot nest them), each line at most
+    :data:`HEADER_WIDTH` characters, the bracketed planner detail dropped."""
+    if not left_out:
+        return ()
+    lines = [f"LEFT OUT {len(left_out)} RECOGNISED FEATURES:"]
+    for note in left_out:
+        short = re.sub(r" \[.*\]$", "", note)
+        text = re.sub(r"[^A-Z0-9 .,:;+=/_-]", " ", short.upper().replace("(", "").replace(
+            ")", ""))
+        text = " ".join(text.split())
+        lines += _wrap(text)
+    return tuple(ir.Comment(line) for line in lines)
+
+
+def _wrap(text: str) -> list[str]:
+    """``text`` in lines of at most :data:`HEADER_WIDTH` characters, the next ones
+    indented."""
+    out: list[str] = []
+    line = ""
+    for word in text.split():
+        candidate = f"{line} {word}" if line else word
+        if len(candidate) > HEADER_WIDTH and line:
+            out.append(line)
+            line = "  " + word
+        else:
+            line = candidate
+    out.append(line)
+    return out

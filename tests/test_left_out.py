@@ -1,0 +1,109 @@
+"""What is left out is left out for a reason the user can act on (issue 17, item 5).
+
+A block made here with three bores the 6 mm ball cannot measure, each for its own
+reason: a D2 through bore (the stylus is too large), a D20 bore 2 mm deep (blind,
+shallower than the ball needs), a D8 bore along X (not along the probe).  Each reason is
+checked word for word in ``plan --all-revolved`` (the table), in the program header
+``plan -o`` writes (Fanuc, LinuxCNC and DMIS: comments the controls accept) and in the
+skeleton ``init`` writes.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from build123d import Align, Box, Cylinder, Pos, Rot, export_step
+from conftest import REPO
+
+from probegen import cad
+from probegen.cli.app import main
+from probegen.errors import ExitCode
+from probegen.machine.profile import load_profile
+from probegen.planning.left_out import header_comments
+from probegen.planning.revolved_spec import all_revolved_spec, smallest_bore
+
+MACHINE = REPO / "samples/machines/vmc-fanuc.toml"
+C, MIN, MAX = Align.CENTER, Align.MIN, Align.MAX
+REASONS = [
+    "R1 bore D2.000 (cylinder, faces 7): bore D2.000: the stylus ball D6.000 needs D8.000 or "
+    "more: a smaller stylus",
+    "R2 bore D20.000 (cylinder, faces 8): blind, depth 2.000 mm: the ball reaches no section "
+    "(it needs 3.500 mm below one: radius 3.000 + margin 0.500): a smaller stylus [no touch "
+    "can be reached safely: touch 1 dropped: its approach from (5.000, 0.000, 19.000) to "
+    "(6.730, 0.000, 19.000): the stylus ball cuts 0.015 mm into face 10; 7 more touches "
+    "dropped]",
+    "R3 bore D8.000 (cylinder, faces 9): axis (1.0000, 0.0000, 0.0000) is 90.0 deg from Z, "
+    "not along the probe: needs an orientation or a setup",
+]
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    part = Box(80, 40, 20, align=(C, C, MIN))
+    part -= Pos(-25, 0, 20) * Cylinder(1.0, 20, align=(C, C, MAX))  # D2 through
+    part -= Pos(0, 0, 20) * Cylinder(10, 2, align=(C, C, MAX))  # D20, 2 deep, blind
+    part -= Pos(25, 0, 10) * Rot(0, 90, 0) * Cylinder(4, 40)  # D8 along X
+    path = tmp_path_factory.mktemp("left_out") / "block.step"
+    export_step(part, path)
+    return path
+
+
+def test_each_reason_names_the_numbers_and_the_remedy(model: Path) -> None:
+    spec, notes = all_revolved_spec(cad.load_part(model), load_profile(MACHINE))
+    assert spec.features == ()
+    assert list(notes) == REASONS
+
+
+def test_smallest_bore_is_what_the_planner_takes() -> None:
+    """The profile: ball 6, margin 0.5: a bore needs r + 1.5 margins + 0.25 core = 4 mm
+    in radius; the bore sample's planning refuses below it."""
+    machine = load_profile(MACHINE)
+    assert smallest_bore(machine) == pytest.approx(8.0)
+
+
+def test_the_plan_table_lists_them(model: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["-q", "plan", "--all-revolved", str(model), "--machine",
+                 str(MACHINE)]) == ExitCode.OK
+    out = capsys.readouterr().out.splitlines()
+    at = out.index("left out (3 recognised features; the reason and what would make each "
+                   "measurable):")
+    assert out[at + 1:] == [f"  {r}" for r in REASONS]
+
+
+@pytest.mark.parametrize(("dialect", "ext", "open_", "close"), [
+    ("fanuc", "nc", "(", ")"), ("linuxcnc", "ngc", "(", ")"), ("dmis", "dmi", "$$ ", "")])
+def test_the_program_header_lists_them(model: Path, tmp_path: Path, dialect: str, ext: str,
+                                       open_: str, close: str) -> None:
+    assert main(["-q", "plan", "--all-revolved", str(model), "--machine", str(MACHINE),
+                 "-d", dialect, "-o", str(tmp_path)]) == ExitCode.OK
+    lines = (tmp_path / f"block.{ext}").read_text(encoding="ascii").splitlines()
+    at = lines.index(f"{open_}LEFT OUT 3 RECOGNISED FEATURES:{close}")
+    block = lines[at + 1:at + 10]
+    text = " ".join(line.removeprefix(open_).removesuffix(close).strip() for line in block)
+    assert "R1 BORE D2.000 CYLINDER, FACES 7: BORE D2.000: THE STYLUS BALL D6.000 NEEDS " \
+           "D8.000 OR MORE: A SMALLER STYLUS" in text
+    assert "R2 BORE D20.000 CYLINDER, FACES 8: BLIND, DEPTH 2.000 MM" in text
+    assert "R3 BORE D8.000 CYLINDER, FACES 9: AXIS 1.0000, 0.0000, 0.0000 IS 90.0 DEG FROM " \
+           "Z, NOT ALONG THE PROBE: NEEDS AN ORIENTATION OR A SETUP" in text
+    assert all(len(line) <= 80 for line in lines)
+    assert not any(re.search(r"\(.*\(|\).*\)", line) for line in block)  # nothing nested
+
+
+def test_header_comments_fit_a_fanuc_block() -> None:
+    long = "R9 " + "word " * 60
+    comments = header_comments((long.strip(), "R10 x (y) [detail dropped]"))
+    assert comments[0].text == "LEFT OUT 2 RECOGNISED FEATURES:"
+    assert all(len(c.text) <= 72 for c in comments)
+    assert comments[-1].text == "R10 X Y"
+    assert header_comments(()) == ()
+
+
+def test_the_skeleton_lists_them(model: Path, tmp_path: Path) -> None:
+    spec = tmp_path / "block.toml"
+    assert main(["-q", "init", str(model), "--machine", str(MACHINE), "-o",
+                 str(spec)]) == ExitCode.OK
+    text = spec.read_text(encoding="ascii")
+    for reason in REASONS:
+        assert f"\n#   {reason}\n" in text
