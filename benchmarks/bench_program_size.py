@@ -66,7 +66,8 @@ def measure(source: Path) -> str:
     d.compact = True
     compact = d.generate(program)  # type: ignore[arg-type]
     setup = program.setup  # type: ignore[attr-defined]
-    library = d.library_files(setup.library_number, setup.variable_base, setup.units)
+    library = d.library_files(setup.library_number, setup.variable_base, setup.units,
+                              setup.options or ())
     touches = inline.count("#3000=1(")
     if not touches:
         raise ProbegenError("no touches")

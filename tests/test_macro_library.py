@@ -36,10 +36,11 @@ GOLDEN = REPO / "tests" / "golden" / "macros"
 SPHERE = REPO / "samples" / "sphere25" / "sphere_test.toml"
 
 
-def library(tmp: Path, dialect: str = "fanuc") -> Path:
-    """The default library (O8000, #100, mm) written into ``tmp``."""
+def library(tmp: Path, dialect: str = "fanuc", options: tuple[str, ...] = ()) -> Path:
+    """The default library (O8000, #100, mm) for a control with ``options``, written
+    into ``tmp``."""
     tmp.mkdir(exist_ok=True)
-    for name, text in get_dialect(dialect).library_files(8000, 100, "mm").items():
+    for name, text in get_dialect(dialect).library_files(8000, 100, "mm", options).items():
         (tmp / name).write_text(text, encoding="ascii")
     return tmp
 
@@ -100,8 +101,9 @@ def bore_block(tmp_path_factory: pytest.TempPathFactory) -> cad.Model:
 
 @pytest.mark.parametrize("dialect", ["fanuc", "haas"])
 def test_library_matches_golden(dialect: str) -> None:
-    """The library as whole files; Haas runs the Fanuc text, so it is the same one."""
-    files = get_dialect(dialect).library_files(8000, 100, "mm")
+    """The library as whole files, as the sample profile (option #3004) has it written;
+    Haas runs the Fanuc text, so it is the same one."""
+    files = get_dialect(dialect).library_files(8000, 100, "mm", ("#3004", "G68"))
     assert list(files) == ["O8000.nc", "O8001.nc", "O8002.nc"]
     for name, text in files.items():
         assert_golden(GOLDEN / name, text)
@@ -114,6 +116,7 @@ def test_library_follows_the_profile() -> None:
     text = files["O7101.nc"]
     assert "O7101(PROBEGEN TOUCH)" in text and "F#690" in text and "#693=#693+1" in text
     assert "GE0.00020" in text and "X#5061[35]" in text  # the check sum and prints in inch
+    assert "#3004" not in text  # no option #3004: no lock
     with pytest.raises(UnsupportedError, match="no macro library"):
         get_dialect("linuxcnc").library_files(8000, 100, "mm")
 
@@ -138,7 +141,8 @@ def test_compact_measures_as_inline(spec_path: Path, dialect: str, bore_block: c
     part = placed_part(spec, bore_block)
     ball = spec.machine.probe.ball_radius
     inline = run(inline_text, part, ball, dialect, None)
-    compact = run(compact_text, part, ball, dialect, library(tmp_path / "lib", dialect))
+    lib = library(tmp_path / "lib", dialect, spec.machine.controller.options)
+    compact = run(compact_text, part, ball, dialect, lib)
     assert inline.alarm is None and compact.alarm is None, (inline.alarm, compact.alarm)
     assert compact.touches == inline.touches > 0
     log = same_records(inline, compact)

@@ -230,8 +230,9 @@ def build_parser() -> argparse.ArgumentParser:
                                        "programs a compile --compact program calls)")
     mc.add_argument("-d", "--dialect", default="fanuc", help="fanuc or haas (default fanuc)")
     mc.add_argument("-o", "--output", default="out", help="output folder (default: out/)")
-    mc.add_argument("--machine", help="machine profile (TOML): units, variable base and "
-                                      "[controller] library_number (default: 8000, mm, #100)")
+    mc.add_argument("--machine", help="machine profile (TOML): units, variable base, "
+                                      "[controller] library_number and options (default: "
+                                      "8000, mm, #100, the dialect's standard options)")
     mc.set_defaults(func=_macros)
 
     f = sub.add_parser("features", help="list the faces of a STEP model")

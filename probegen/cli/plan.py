@@ -80,7 +80,7 @@ def checked_library(dialect: Any, machine: Any) -> dict[str, str]:
     """
     c = machine.controller
     files: dict[str, str] = dialect.library_files(c.library_number, c.variable_base,
-                                                  machine.units)
+                                                  machine.units, c.options)
     for number in range(c.library_number, c.library_number + len(files)):
         machine.check_program_number(
             number, f"{machine.source}: controller.library_number (O{number})")
@@ -97,13 +97,13 @@ def write_library(folder: Path, files: dict[str, str]) -> None:
 
 def _macros(args: argparse.Namespace) -> int:
     from probegen.dialects import get_dialect
-    from probegen.machine.profile import load_profile
+    from probegen.machine.profile import DEFAULT_OPTIONS, load_profile
 
     dialect = get_dialect(args.dialect)
     if args.machine:
         files = checked_library(dialect, load_profile(args.machine))
-    else:
-        files = dialect.library_files(8000, 100, "mm")
+    else:  # a profile that says nothing: the dialect's standard options
+        files = dialect.library_files(8000, 100, "mm", DEFAULT_OPTIONS.get(dialect.NAME, ()))
     write_library(Path(args.output), files)
     return ExitCode.OK
 

@@ -228,9 +228,11 @@ class Dialect:
         self.check_size(text)
         return text
 
-    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+    def library_files(self, first: int, base: int, units: str,
+                      options: tuple[str, ...] = ()) -> dict[str, str]:
         """File name -> text of the macro library's subprograms, numbered from ``first``,
-        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``).
+        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``) on a
+        control with ``options`` (``[controller] options``).
 
         Raises:
             UnsupportedError: the dialect has no library (``MACRO_LIBRARY`` false).

@@ -73,15 +73,18 @@ class Fanuc(MacroB):
     operator can still stop the machine)."""
     MACRO_LIBRARY: ClassVar[bool] = True
 
-    def library_for(self, first: int, base: int, units: str) -> Library:
+    def library_for(self, first: int, base: int, units: str,
+                    options: tuple[str, ...] = ()) -> Library:
         """The macro library from O``first`` for programs with variable base ``base`` in
-        ``units``."""
+        ``units`` on a control with ``options`` (``#3004``: the touch is locked)."""
         self.units = units
+        lock, unlock = self.lock_blocks(options)
         return Library(first, base, self.num(self.scale(self.CHECK_SUM)),
-                       self.DPRNT_FORMAT[units])
+                       self.DPRNT_FORMAT[units], lock, unlock)
 
-    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
-        files = self.library_for(first, base, units).files()
+    def library_files(self, first: int, base: int, units: str,
+                      options: tuple[str, ...] = ()) -> dict[str, str]:
+        files = self.library_for(first, base, units, options).files()
         for text in files.values():
             self.check_lines(text)
         return files
@@ -99,7 +102,8 @@ class Fanuc(MacroB):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
-        self.lib = self.library_for(s.library_number, s.variable_base, s.units)
+        self.lib = self.library_for(s.library_number, s.variable_base, s.units,
+                                    s.options or ())
         blocks = [self.block(node) for node in nodes]
         if self.compact:
             blocks = self.bind(self.points(blocks))
@@ -280,12 +284,18 @@ class Fanuc(MacroB):
                 **self.skip_lock()}
 
     def skip_lock(self) -> dict[str, list[str]]:
-        """The blocks before (``lock``) and after (``unlock``) a touch's G31 that hold
-        single block and feed override (``SKIP_LOCK``), empty without option ``#3004``."""
-        if "#3004" not in (self.setup.options or ()):
-            return {"lock": [], "unlock": []}
-        return {"lock": [f"{v}={value}" for v, value in self.SKIP_LOCK],
-                "unlock": [f"{v}=0" for v, _ in reversed(self.SKIP_LOCK)]}
+        """The blocks before (``lock``) and after (``unlock``) an inline touch's G31."""
+        lock, unlock = self.lock_blocks(self.setup.options or ())
+        return {"lock": list(lock), "unlock": list(unlock)}
+
+    def lock_blocks(self, options: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The blocks before and after a touch's G31 that hold single block and feed
+        override (``SKIP_LOCK``), in the inline form and in the library's touch alike;
+        empty without option ``#3004``."""
+        if "#3004" not in options:
+            return (), ()
+        return (tuple(f"{v}={value}" for v, value in self.SKIP_LOCK),
+                tuple(f"{v}=0" for v, _ in reversed(self.SKIP_LOCK)))
 
     def assign(self, node: ir.Assign) -> dict[str, Any]:
         if node.b is not None:
