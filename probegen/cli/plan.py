@@ -31,6 +31,7 @@ def _compile(args: argparse.Namespace) -> int:
         raise ProbegenError("compile --compact -o -: expected a folder or file for -o, found "
                             "stdout; the program calls the macro library, which is written "
                             "beside it (or write it with probegen macros -o DIR)")
+    compact = args.compact is not False and args.output != "-"  # stdout: self-contained
     part: Part | None = None
     outputs = []
     for name in names:
@@ -40,7 +41,11 @@ def _compile(args: argparse.Namespace) -> int:
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
-        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
+        dialect.compact = compact and dialect.MACRO_LIBRARY  # DMIS, LinuxCNC: inline
+        if dialect.MACRO_LIBRARY and args.compact is None and args.output == "-":
+            print(f"note: the {name} program on stdout is the inline form (every skip move "
+                  "in it); with -o FOLDER compile writes the compact form and its macro "
+                  "library", file=sys.stderr)
         text = dialect.generate(planned.program)
         library = checked_library(dialect, spec.machine) if dialect.compact else {}
         if args.output == "-":

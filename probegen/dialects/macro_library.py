@@ -1,8 +1,8 @@
 """probegen's Macro B subprogram library: the touch and the protected move as G65 macros.
 
-A compact Macro B program (``compile --compact``) calls these instead of spelling every
-skip move out inline; each is one program (``O<n>``) in its own file ``O<n>.nc``, the
-name a control operator loads it by.  Numbers run up from the profile's
+A compact Macro B program (``compile``'s default for Fanuc and Haas) calls these instead
+of spelling every skip move out inline; each is one program (``O<n>``) in its own file
+``O<n>.nc``, the name a control operator loads it by.  Numbers run up from the profile's
 ``[controller] library_number`` (default 8000; the compile checks each against
 ``[controller] program_numbers``).
 
