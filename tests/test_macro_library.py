@@ -109,6 +109,20 @@ def test_library_matches_golden(dialect: str) -> None:
         assert_golden(GOLDEN / name, text)
 
 
+def test_at_most_9999_features_in_a_compact_program() -> None:
+    """The library prints a feature's number with 4 digits: the 10000th is refused."""
+    d = get_dialect("fanuc")
+    d.compact = True
+    d.lib = d.library_for(8000, 100, "mm")
+    calls = [{"call": True, "feature": f"F{k}", "move": 1} for k in range(1, 10001)]
+    bound = d.bind(calls[:-1])
+    assert bound[-4:] == [{"kind": "bind", "feature": "F9999", "number": 9999},
+                          {"kind": "assign", "var": "#192", "value": "0"},  # move counter
+                          {"kind": "assign", "var": "#194", "value": "9999"}, calls[-2]]
+    with pytest.raises(UnsupportedError, match="at most 9999 features .* found more at F10000"):
+        d.bind(calls)
+
+
 def test_library_follows_the_profile() -> None:
     """Numbers, variable base and units move the text; the program number is its name."""
     files = get_dialect("fanuc").library_files(7100, 600, "inch")

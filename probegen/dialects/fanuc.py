@@ -55,6 +55,7 @@ from probegen.dialects.macro_library import (
     TOUCH,
     Library,
 )
+from probegen.errors import UnsupportedError
 
 
 class Fanuc(MacroB):
@@ -184,9 +185,11 @@ class Fanuc(MacroB):
             if feature not in numbers:
                 numbers[feature] = len(numbers) + 1
                 if numbers[feature] >= 10 ** FEATURE_DIGITS:
-                    raise self.unsupported(ir.Comment(feature), "more than "
-                                           f"{10 ** FEATURE_DIGITS - 1} features in a "
-                                           "compact program")
+                    raise UnsupportedError(
+                        f"dialect {self.NAME!r}: a compact program prints at most "
+                        f"{10 ** FEATURE_DIGITS - 1} features (their numbers have "
+                        f"{FEATURE_DIGITS} digits), found more at {feature}; split the spec "
+                        "or compile --inline")
                 out.append({"kind": "bind", "feature": feature, "number": numbers[feature]})
             wanted = {FEATURE: numbers[feature]}
             if "move" in b:
