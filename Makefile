@@ -25,7 +25,7 @@ demo: $(STAMP)
 	    sleep 2; $(BIN)/probegen capture --port out/vm.tty --out out/run.log --timeout 20; wait
 	$(BIN)/probegen ingest out/run.log --spec samples/sphere25/sphere_test.toml -o out --write-calibration out/probe-calibration.toml
 	$(BIN)/probegen report out/results.json -o out/report.html
-	@echo "programs: out/sphere_test.nc (Fanuc Macro B), out/sphere_test.dmi (DMIS)"
+	@echo "programs: out/sphere_test.nc (Fanuc Macro B, compact: calls the macro library out/O8000.nc-O8002.nc), out/sphere_test.dmi (DMIS)"
 	@echo "machine log: out/run.log; results: out/results.json, out/results.csv, out/probe-calibration.toml"
 	@echo "report: out/report.html"
 

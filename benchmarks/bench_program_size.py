@@ -9,8 +9,11 @@ with arguments, those STEP models' all-revolved programs instead of the DCX part
 program: touches (one G31 touch each), bytes and lines of the inline program and of the
 compact main program (``compile --compact``: G65 calls to the macro library), bytes per
 touch of each, the library's size (written once per control, not per program), and
-whether both forms print the same DPRNT log on the virtual machine (the part at its
-nominal placement, a perfect probe): it must be ``same``.
+whether both forms measure the same on the virtual machine (the part at its nominal
+placement, a perfect probe): the two DPRNT logs differ in their text (the compact
+program's is format V2: ``FEAT`` lines and touches naming their feature by number), so
+``same`` means that both read without a diagnostic to the same touches, each with its
+kind, feature, index and X Y Z, in the same order.
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ def measure(source: Path) -> str:
     from probegen.dialects import get_dialect
     from probegen.errors import ProbegenError
     from probegen.machine.probe_model import ProbeModel
+    from probegen.results import parse_dprnt
     from probegen.sim.vm import VirtualMachine, run_text
 
     program, spec, placed = programs(source)
@@ -62,7 +66,8 @@ def measure(source: Path) -> str:
     d.compact = True
     compact = d.generate(program)  # type: ignore[arg-type]
     setup = program.setup  # type: ignore[attr-defined]
-    library = d.library_files(setup.library_number, setup.variable_base, setup.units)
+    library = d.library_files(setup.library_number, setup.variable_base, setup.units,
+                              setup.options or ())
     touches = inline.count("#3000=1(")
     if not touches:
         raise ProbegenError("no touches")
@@ -72,7 +77,9 @@ def measure(source: Path) -> str:
             Path(tmp, name).write_text(text, encoding="ascii")
         logs = [run_text(text, VirtualMachine(placed, ProbeModel(ball)),  # type: ignore[arg-type]
                          kind="macrob", program_dir=Path(tmp)) for text in (inline, compact)]
-    same = "same" if logs[0].output == logs[1].output and not logs[0].alarm else "DIFFERENT"
+    read = [[(t.kind, t.feature, t.index, t.xyz) for t in
+             parse_dprnt(log.output, strict=True).touches] for log in logs]
+    same = "same" if read[0] == read[1] and not logs[0].alarm else "DIFFERENT"
     lines = [text.count("\n") for text in (inline, compact)]
     return (f"| {source.stem[:32]} | {touches} | {len(inline):,} | {lines[0]:,} | "
             f"{len(inline) / touches:.0f} | {lines[0] / touches:.1f} | {len(compact):,} | "

@@ -12,14 +12,42 @@ from probegen.cli.app import ExitCode, main
 
 def test_compile_writes_both_dialects(in_repo: Path, tmp_path: Path,
                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """Fanuc compact (the default: the program and its macro library, as the golden
+    files), DMIS inline; --inline gives the self-contained golden program."""
     code = main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanuc", "-d", "dmis",
                  "-o", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == ExitCode.OK
+    golden = REPO / "tests/golden"
     assert (tmp_path / "sphere_test.nc").read_text() == (
-        REPO / "tests/golden/sphere25/sphere_test.nc").read_text()
+        golden / "macros/sphere_test.compact.nc").read_text()
+    for name in ("O8000.nc", "O8001.nc", "O8002.nc"):
+        assert (tmp_path / name).read_text() == (golden / "macros" / name).read_text()
     assert (tmp_path / "sphere_test.dmi").exists()
     assert "retract 2.000 mm (safe minimum 1.605 mm)" in out
+    assert "wrote the macro library O8000.nc, O8001.nc, O8002.nc" in out
+    inline = tmp_path / "inline"
+    assert main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanuc", "--inline",
+                 "-o", str(inline)]) == ExitCode.OK
+    assert [p.name for p in inline.iterdir()] == ["sphere_test.nc"]
+    assert (inline / "sphere_test.nc").read_text() == (
+        golden / "sphere25/sphere_test.nc").read_text()
+
+
+def test_compile_to_stdout_prints_the_inline_form(in_repo: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """-o -: one self-contained program (a compact one would not run without its
+    library), and a note on stderr saying so; --compact -o - is refused."""
+    assert main(["compile", "samples/sphere25/sphere_test.toml", "-d", "fanuc", "-d", "dmis",
+                 "-o", "-"]) == ExitCode.OK
+    out, err = capsys.readouterr()
+    inline = (REPO / "tests/golden/sphere25/sphere_test.nc").read_text()
+    assert out.startswith(inline) and "G65" not in out and "DMISMN" in out
+    assert err == ("note: the fanuc program on stdout is the inline form (every skip move in "
+                   "it); with -o FOLDER compile writes the compact form and its macro library\n")
+    assert main(["compile", "samples/sphere25/sphere_test.toml", "--compact",
+                 "-o", "-"]) == ExitCode.ERROR
+    assert "found stdout; the program calls the macro library" in capsys.readouterr().err
 
 
 def test_sphere_points_reports_figures(capsys: pytest.CaptureFixture[str]) -> None:

@@ -38,6 +38,7 @@ from conftest import REPO
 from scipy.optimize import linprog
 
 from probegen import cad
+from probegen.cli.plan import checked_library
 from probegen.dialects import get_dialect
 from probegen.evaluate.ingest import ingest, nominal_of
 from probegen.evaluate.outputs import to_json
@@ -45,7 +46,7 @@ from probegen.evaluate.revolved import evaluate_revolved
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import part_of, plan_program
 from probegen.planning.revolved_spec import plan_revolved
-from probegen.results import parse_dmis_output
+from probegen.results import parse_dmis_output, parse_dprnt
 from probegen.sim.contact import ContactHit, PlacedPart
 from probegen.sim.form import FormError, Lobe
 from probegen.sim.vm import VirtualMachine, run_text
@@ -63,14 +64,23 @@ RIM = FormError(6, offset=-0.002)
 
 
 def run(spec_path: Path, forms: tuple[FormError, ...], dialect: str,
-        tmp_path: Path) -> tuple[str, VirtualMachine]:
+        tmp_path: Path, *, compact: bool = False) -> tuple[str, VirtualMachine]:
+    """The spec's program (``compact``: calling the macro library, written into
+    ``tmp_path/lib`` as compile writes it) run on the part with the planted forms."""
     spec = load_spec(spec_path)
     d = get_dialect(dialect)
+    d.compact = compact
     text = d.generate(plan_program(spec, runtime_variables=d.RUNTIME_VARIABLES).program)
+    lib = None
+    if compact:
+        lib = tmp_path / "lib"
+        lib.mkdir()
+        for name, body in checked_library(d, spec.machine).items():
+            (lib / name).write_text(body, encoding="ascii")
     assert spec.model is not None
     part = PlacedPart.from_model(cad.load_step(spec.model), translation=OFFSET, forms=forms)
     vm = VirtualMachine(part, ProbeModel(3.0))
-    res = run_text(text, vm, kind="dmis" if dialect == "dmis" else "macrob")
+    res = run_text(text, vm, kind="dmis" if dialect == "dmis" else "macrob", program_dir=lib)
     assert res.alarm is None
     return res.output, vm
 
@@ -170,6 +180,30 @@ def test_fanuc_bore_block_size_taper_roundness(tmp_path: Path) -> None:
     html = render_report(json.loads(js))
     assert all(f">{name}<" in html for name in ("D_S1", "TAPER", "TILT"))
     assert ">RON_S1 <small>minimum zone</small><" in html
+
+
+@pytest.mark.parametrize(("spec_path", "forms"), [(BORE_BLOCK, (BORE, BOSS)),
+                                                 (REVOLVED_BLOCK, (CONE, DOME, RIM))],
+                         ids=["bore_block", "revolved_block"])
+def test_compact_form_measures_the_forms_as_inline(
+        spec_path: Path, forms: tuple[FormError, ...], tmp_path: Path) -> None:
+    """The compact program (G65 calls, the library prints a V2 log) on the same perturbed
+    part: the same touches, exactly, and the same results.json as the inline program
+    whose results the tests above check against the planted truth."""
+    docs, touches = [], []
+    for compact in (False, True):
+        folder = tmp_path / str(compact)
+        folder.mkdir()
+        output, _ = run(spec_path, forms, "fanuc", folder, compact=compact)
+        log = folder / "run.log"
+        log.write_text(output)
+        read = parse_dprnt(output, strict=True)
+        touches.append([(t.kind, t.feature, t.index, t.xyz) for t in read.touches])
+        doc = json.loads(to_json(ingest(log, load_spec(spec_path))))
+        assert doc.pop("source") == str(log)
+        docs.append(doc)
+    assert touches[1] == touches[0] and len(touches[0]) >= 22
+    assert docs[1] == docs[0] and docs[0]["features"]
 
 
 def test_dmis_bore_block_with_forms_on_the_virtual_cmm(tmp_path: Path) -> None:

@@ -12,6 +12,7 @@ from fuzzing import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from probegen.cli.plan import checked_library
 from probegen.dialects import get_dialect
 from probegen.errors import SpecError, UnsupportedError
 from probegen.machine.probe_model import ProbeModel
@@ -58,6 +59,20 @@ def write_spec(tmp: Path, source: Path, profile: str) -> Path:
 def program(tmp: Path, dialect: str = "fanuc", **profile: str | None) -> str:
     spec = load_spec(write_spec(tmp, SPHERE_SPEC, profile_text(**profile)))  # type: ignore[arg-type]
     return get_dialect(dialect).generate(plan_program(spec, runtime_variables=True).program)
+
+
+def compact(tmp: Path, options: str | None) -> tuple[str, Path]:
+    """The compact program of the sphere spec and the folder holding its library, both
+    as ``compile --compact`` writes them for the profile with ``options``."""
+    spec = load_spec(write_spec(tmp, SPHERE_SPEC, profile_text(options=options)))
+    d = get_dialect("fanuc")
+    d.compact = True
+    text = d.generate(plan_program(spec, runtime_variables=True).program)
+    lib = tmp / "lib"
+    lib.mkdir()
+    for name, body in checked_library(d, spec.machine).items():
+        (lib / name).write_text(body, encoding="ascii")
+    return text, lib
 
 
 def vm() -> VirtualMachine:
@@ -160,14 +175,37 @@ def test_each_touch_is_locked_and_released(tmp_path: Path) -> None:
                    for line in program(tmp_path, options="[]").splitlines())
 
 
+@pytest.mark.parametrize("options", [None, '["#3004"]', "[]"])
+def test_the_library_locks_where_the_inline_program_does(tmp_path: Path,
+                                                        options: str | None) -> None:
+    """The compact form: the touch's G31 in O8001 and O8002 (F#190, the probing feed)
+    sits between the same lock and unlock blocks as an inline touch; the protected moves'
+    G31 (F#191) and the main program have none; without #3004 nothing is locked."""
+    text, lib = compact(tmp_path, options)
+    locked = options != "[]"
+    assert "#3003" not in text and "#3004" not in text
+    for name in ("O8000.nc", "O8001.nc", "O8002.nc"):
+        lines = (lib / name).read_text().splitlines()
+        skips = [k for k, line in enumerate(lines) if line.startswith("G31")]
+        for k in skips:
+            before, after = lines[k - 2:k], lines[k + 1:k + 3]
+            touch = lines[k].endswith("F#190")
+            assert (before == ["#3003=1", "#3004=2"]) == (touch and locked), (name, k)
+            assert (after == ["#3004=0", "#3003=0"]) == (touch and locked), (name, k)
+        held = sum(line.startswith(("#3003", "#3004")) for line in lines)
+        assert held == (4 if locked and name != "O8000.nc" else 0), name
+
+
+@pytest.mark.parametrize("form", ["inline", "compact"])
 @pytest.mark.parametrize(("options", "touch_feed"), [(None, 300.0), ("[]", 150.0)])
 def test_the_lock_holds_the_touch_feed_on_the_virtual_machine(
-        tmp_path: Path, options: str | None, touch_feed: float) -> None:
+        tmp_path: Path, options: str | None, touch_feed: float, form: str) -> None:
     """The operator's override at 50 %: the touches run at the programmed 300 mm/min
     only while #3004 holds it; the protected moves after them run at 1000, so the lock
-    was released."""
-    text = program(tmp_path, options=options)
-    res = run_program(text, vm(), variables={10020: 0.0, 11020: 0.0},
+    was released (in the inline program, or in the library the compact one calls)."""
+    text, lib = compact(tmp_path, options) if form == "compact" else \
+        (program(tmp_path, options=options), None)
+    res = run_program(text, vm(), variables={10020: 0.0, 11020: 0.0}, program_dir=lib,
                       settings=control_settings("fanuc", home=(0.0, 0.0, 500.0),
                                                 feed_override=50.0))
     assert res.alarm is None, res.alarm

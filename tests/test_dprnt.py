@@ -187,7 +187,7 @@ def test_feature_id_like_keywords() -> None:
 
 HEAD = "PGSTART O1001 V1\n"
 
-RECORD = "a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND)"
+RECORD = "a record (PGSTART, PGCAL, PGSERIAL, FEAT, LOC, CTR, PT, RES, ERR or PGEND)"
 MALFORMED = [
     ("PT SPH1 13 X1 Y2", 17, "expected 'Z', found end of line"),
     ("PT SPH1 1 X1.5.5 Y2 Z3", 15, "expected 'Y', found '.5'"),
@@ -196,9 +196,9 @@ MALFORMED = [
     ("PT SPH1 X1 Y2 Z3", 9, "expected an index, found 'X1'"),
     ("PT SPH1 12X1 Y2 Z3", 9, "expected an index, found '12X1'"),
     ("PT SPH1 12.5 X1 Y2 Z3", 9, "expected an index, found '12.5'"),
-    ("PT S_1 1 X1 Y2 Z3", 4, "expected a feature id, found 'S_1'"),
-    ("PT 1A 1 X1 Y2 Z3", 4, "expected a feature id, found '1A'"),
-    ("PT", 3, "expected a feature id, found end of line"),
+    ("PT S_1 1 X1 Y2 Z3", 4, "expected a feature id or a feature number, found 'S_1'"),
+    ("PT 1A 1 X1 Y2 Z3", 4, "expected a feature id or a feature number, found '1A'"),
+    ("PT", 3, "expected a feature id or a feature number, found end of line"),
     ("PT SPH1 12 X- Y2 Z3", 15, "expected a number, found 'Y2'"),
     ("PTX SPH1 1 X1 Y2 Z3", 1, f"expected {RECORD}, found 'PTX'"),
     ("%PX 1", 2, f"expected {RECORD}, found 'PX'"),
@@ -330,7 +330,7 @@ STRUCTURE = [
         1,
         "expected program O1001 (as in the first header), found O1002: one log per program",
     ),
-    ("PGSTART O1001 V2\n", 1, 15, "expected format version V1, found V2"),
+    ("PGSTART O1001 V3\n", 1, 15, "expected format version V1 to V2, found V3"),
     ("PGSTART O0 V1\n", 1, 9, "expected a program number from O1 to O99999999, found 'O0'"),
 ]
 

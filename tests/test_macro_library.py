@@ -1,12 +1,14 @@
 """probegen's Macro B macro library and the compact program form that calls it.
 
 Planted truth and tolerance as in test_haas_closed_loop.py (the part off G54 by a small
-shift and turn, a lobing probe), compared byte for byte: a compact program (G65 calls to
-O8000/O8001) and the inline program of the same spec command the same positions in the
-same order, so their DPRNT logs are the same bytes, their touches the same count and the
-variables they leave the same, save the four commons #base+90..#base+93 each form uses in
-its own way.  When a move fails (no touch, an unexpected trigger) both print the same
-``ERR`` line and stop on the same macro alarm.
+shift and turn, a lobing probe), compared exactly: a compact program (G65 calls to
+O8000-O8002) and the inline program of the same spec command the same positions in the
+same order, so their DPRNT logs read to the same records (touches with kind, feature,
+index and X Y Z, centres, results, errors: the compact log is format V2, its touches
+name their feature by number, so the text differs), ``results.json`` is the same text,
+their touches the same count and the variables they leave the same, save the commons
+#base+90..#base+96 each form uses in its own way.  When a move fails (no touch, an
+unexpected trigger) both print the same ``ERR`` record and stop on the same macro alarm.
 """
 
 from __future__ import annotations
@@ -16,15 +18,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, assert_golden
-from test_haas_closed_loop import LOBING, SPECS, WORK, placed_part
+from test_haas_closed_loop import LOBING, SPECS, WORK, placed_part, results
 
 from probegen import cad
 from probegen.cli.app import ExitCode, main
 from probegen.dialects import get_dialect
-from probegen.dialects.macro_b import SCRATCH
+from probegen.dialects.macro_library import COMMONS
 from probegen.errors import UnsupportedError
 from probegen.machine.probe_model import ProbeModel
 from probegen.planning import plan_program
+from probegen.results import DprntLog, parse_dprnt
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import SimResult, VirtualMachine, run_text
 from probegen.spec.model import load_spec
@@ -33,10 +36,11 @@ GOLDEN = REPO / "tests" / "golden" / "macros"
 SPHERE = REPO / "samples" / "sphere25" / "sphere_test.toml"
 
 
-def library(tmp: Path, dialect: str = "fanuc") -> Path:
-    """The default library (O8000, #100, mm) written into ``tmp``."""
+def library(tmp: Path, dialect: str = "fanuc", options: tuple[str, ...] = ()) -> Path:
+    """The default library (O8000, #100, mm) for a control with ``options``, written
+    into ``tmp``."""
     tmp.mkdir(exist_ok=True)
-    for name, text in get_dialect(dialect).library_files(8000, 100, "mm").items():
+    for name, text in get_dialect(dialect).library_files(8000, 100, "mm", options).items():
         (tmp / name).write_text(text, encoding="ascii")
     return tmp
 
@@ -48,6 +52,27 @@ def forms(spec_path: Path, dialect: str) -> tuple[str, str]:
     d = get_dialect(dialect)
     d.compact = True
     return inline, d.generate(program)
+
+
+def records(log: DprntLog) -> tuple[object, ...]:
+    """What a log says, without the lines it said it on: the program and its runs'
+    identities, every touch (kind, feature, index, X Y Z), centre, result and error."""
+    return (log.program, log.complete, [(r.program, r.identity) for r in log.runs],
+            [(t.kind, t.feature, t.index, t.xyz, t.run) for t in log.touches],
+            [(c.feature, c.xyz) for c in log.centres], [(r.feature, r.values)
+                                                       for r in log.results],
+            [(e.code, e.feature, e.index) for e in log.errors],
+            [c.fingerprint for c in log.calibrations])
+
+
+def same_records(inline: SimResult, compact: SimResult) -> DprntLog:
+    """Both logs read without a diagnostic to the same records; the compact one is V2."""
+    a, b = (parse_dprnt(res.output, strict=True) for res in (inline, compact))
+    assert records(b) == records(a)
+    assert [line.split()[2] for line in (inline.output, compact.output)
+            for line in line.splitlines() if line.startswith("PGSTART")] == ["V1", "V2"]
+    assert not a.features and {f.feature for f in b.features} >= {t.feature for t in b.touches}
+    return b
 
 
 def run(text: str, part: PlacedPart, ball: float, control: str,
@@ -76,11 +101,26 @@ def bore_block(tmp_path_factory: pytest.TempPathFactory) -> cad.Model:
 
 @pytest.mark.parametrize("dialect", ["fanuc", "haas"])
 def test_library_matches_golden(dialect: str) -> None:
-    """The library as whole files; Haas runs the Fanuc text, so it is the same one."""
-    files = get_dialect(dialect).library_files(8000, 100, "mm")
+    """The library as whole files, as the sample profile (option #3004) has it written;
+    Haas runs the Fanuc text, so it is the same one."""
+    files = get_dialect(dialect).library_files(8000, 100, "mm", ("#3004", "G68"))
     assert list(files) == ["O8000.nc", "O8001.nc", "O8002.nc"]
     for name, text in files.items():
         assert_golden(GOLDEN / name, text)
+
+
+def test_at_most_9999_features_in_a_compact_program() -> None:
+    """The library prints a feature's number with 4 digits: the 10000th is refused."""
+    d = get_dialect("fanuc")
+    d.compact = True
+    d.lib = d.library_for(8000, 100, "mm")
+    calls = [{"call": True, "feature": f"F{k}", "move": 1} for k in range(1, 10001)]
+    bound = d.bind(calls[:-1])
+    assert bound[-4:] == [{"kind": "bind", "feature": "F9999", "number": 9999},
+                          {"kind": "assign", "var": "#192", "value": "0"},  # move counter
+                          {"kind": "assign", "var": "#194", "value": "9999"}, calls[-2]]
+    with pytest.raises(UnsupportedError, match="at most 9999 features .* found more at F10000"):
+        d.bind(calls)
 
 
 def test_library_follows_the_profile() -> None:
@@ -88,8 +128,9 @@ def test_library_follows_the_profile() -> None:
     files = get_dialect("fanuc").library_files(7100, 600, "inch")
     assert list(files) == ["O7100.nc", "O7101.nc", "O7102.nc"]
     text = files["O7101.nc"]
-    assert "O7101(PROBEGEN TOUCH)" in text and "F#690" in text and "M99 P#692" in text
-    assert "GE0.00020" in text  # the check sum in inch
+    assert "O7101(PROBEGEN TOUCH)" in text and "F#690" in text and "#693=#693+1" in text
+    assert "GE0.00020" in text and "X#5061[35]" in text  # the check sum and prints in inch
+    assert "#3004" not in text  # no option #3004: no lock
     with pytest.raises(UnsupportedError, match="no macro library"):
         get_dialect("dmis").library_files(8000, 100, "mm")
 
@@ -114,14 +155,19 @@ def test_compact_measures_as_inline(spec_path: Path, dialect: str, bore_block: c
     part = placed_part(spec, bore_block)
     ball = spec.machine.probe.ball_radius
     inline = run(inline_text, part, ball, dialect, None)
-    compact = run(compact_text, part, ball, dialect, library(tmp_path / "lib", dialect))
+    lib = library(tmp_path / "lib", dialect, spec.machine.controller.options)
+    compact = run(compact_text, part, ball, dialect, lib)
     assert inline.alarm is None and compact.alarm is None, (inline.alarm, compact.alarm)
     assert compact.touches == inline.touches > 0
-    assert compact.output == inline.output and "PGEND" in compact.output
+    log = same_records(inline, compact)
+    assert log.complete and len(log.touches) == inline.touches
     base = spec.machine.controller.variable_base
-    own = range(base + SCRATCH, base + SCRATCH + 4)
+    own = range(base + COMMONS[0], base + COMMONS[-1] + 1)
     assert {k: v for k, v in compact.variables.items() if k not in own and k > 33} == \
         {k: v for k, v in inline.variables.items() if k not in own and k > 33}
+    compact_doc = results(compact, spec, tmp_path / "compact")
+    assert compact_doc == results(inline, spec, tmp_path / "inline")
+    assert compact_doc["complete"] and compact_doc["features"]
 
 
 @pytest.mark.parametrize(("shift", "code", "alarm"), [
@@ -138,8 +184,9 @@ def test_failed_move_as_inline(shift: float, code: str, alarm: str, tmp_path: Pa
     compact = run(compact_text, part, ball, "fanuc", library(tmp_path))
     assert inline.alarm is not None and compact.alarm is not None
     assert compact.alarm.split(" (line")[0] == inline.alarm.split(" (line")[0] == alarm
-    assert compact.output == inline.output
-    assert f"\nERR {code} SPH1 " in compact.output
+    log = same_records(inline, compact)
+    assert [(e.code, e.feature) for e in log.errors] == [(code, "SPH1")]
+    assert f"\nFEAT SPH1 1\nERR {code} 1 1\n" in compact.output  # printed by the library
 
 
 def test_missing_library_is_named(tmp_path: Path) -> None:

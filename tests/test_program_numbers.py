@@ -64,8 +64,8 @@ def test_numbers_below_the_protected_range_pass(tmp_path: Path, number: int) -> 
 
 @pytest.mark.parametrize(("controller", "number", "ok"), [
     ("program_numbers = [1, 9999]", 9001, True),
-    ("program_numbers = [9000, 9099]", 9001, True),
-    ("program_numbers = [9000, 9099]", 9100, False),
+    ("program_numbers = [9000, 9099]\nlibrary_number = 9090", 9001, True),
+    ("program_numbers = [9000, 9099]\nlibrary_number = 9090", 9100, False),
     ("program_numbers = [1000, 1999]", 2001, False),
     ("program_numbers = [1000, 1999]", 999, False),
 ])
@@ -77,9 +77,23 @@ def test_the_profile_range_decides(tmp_path: Path, capsys: pytest.CaptureFixture
     if ok:
         assert f"\nO{number}(SPHERE TEST ISO)\n" in (tmp_path / "out/spec.haas.nc").read_text()
     else:
-        lo, hi = controller.split("[")[1].rstrip("]").split(", ")
+        lo, hi = controller.split("[")[1].split("]")[0].split(", ")
         assert f"expected a program number in O{lo}-O{hi}" in err
         assert ("are protected" in err) is (number >= 9000)
+
+
+def test_the_library_needs_a_number_in_the_range(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """The compact form (compile's default) writes the macro library O8000-O8002 too: a
+    range without them is refused, naming the key that moves the library; the inline
+    form calls nothing and passes."""
+    spec = write_spec(tmp_path, 9001, "program_numbers = [9000, 9099]")
+    assert compile_(spec, tmp_path) == ExitCode.SPEC
+    err = capsys.readouterr().err
+    assert "controller.library_number (O8000): expected a program number in O9000-O9099" in err
+    assert not (tmp_path / "out").exists()
+    assert main(["compile", str(spec), "--inline", "-o", str(tmp_path / "out"), "-q"]) == 0
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["spec.nc"]
 
 
 @pytest.mark.parametrize("dialect", ["linuxcnc", "dmis"])

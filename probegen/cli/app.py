@@ -218,22 +218,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help="probe calibration (from ingest --write-calibration) baked into "
                         "the in-process actions; overrides the spec's [machine] calibration")
     form = c.add_mutually_exclusive_group()
-    form.add_argument("--compact", action="store_true",
+    form.add_argument("--compact", action="store_true", default=None,
                       help="Fanuc/Haas: call probegen's macro library (G65) for every skip "
                            "move and write the library beside the program (O8000.nc ...); "
-                           "LinuxCNC: o<pg_move>/o<pg_touch> calls, pg_move.ngc ...; DMIS "
-                           "is written inline")
+                           "the default for Fanuc and Haas, but on stdout (-o -); LinuxCNC "
+                           "(opt-in): o<pg_move>/o<pg_touch> calls, pg_move.ngc ...; DMIS is "
+                           "written inline")
     form.add_argument("--inline", dest="compact", action="store_false",
-                      help="every skip move spelt out in the program (the default)")
+                      help="every skip move spelt out in the program, self-contained (the "
+                           "form -o - prints)")
     c.set_defaults(func=_compile)
 
     mc = sub.add_parser("macros", help="write probegen's Macro B subprogram library (the "
-                                       "programs a compile --compact program calls)")
+                                       "programs a compact program calls)")
     mc.add_argument("-d", "--dialect", default="fanuc",
                     help="fanuc, haas or linuxcnc (o-word subroutine files; default fanuc)")
     mc.add_argument("-o", "--output", default="out", help="output folder (default: out/)")
-    mc.add_argument("--machine", help="machine profile (TOML): units, variable base and "
-                                      "[controller] library_number (default: 8000, mm, #100)")
+    mc.add_argument("--machine", help="machine profile (TOML): units, variable base, "
+                                      "[controller] library_number and options (default: "
+                                      "8000, mm, #100, the dialect's standard options)")
     mc.set_defaults(func=_macros)
 
     from probegen.cli.init import add_init_command

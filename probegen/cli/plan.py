@@ -42,7 +42,13 @@ def _compile(args: argparse.Namespace) -> int:
         with Bar(f"planning for {name}", unit="steps") as bar:
             planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
                                    progress=bar, part=part)
-        dialect.compact = args.compact and dialect.MACRO_LIBRARY  # DMIS: inline
+        compact = args.compact or (args.compact is None and dialect.COMPACT_DEFAULT
+                                   and args.output != "-")  # stdout: self-contained
+        dialect.compact = bool(compact) and dialect.MACRO_LIBRARY  # DMIS: inline
+        if dialect.COMPACT_DEFAULT and args.compact is None and args.output == "-":
+            print(f"note: the {name} program on stdout is the inline form (every skip move "
+                  "in it); with -o FOLDER compile writes the compact form and its macro "
+                  "library", file=sys.stderr)
         library = checked_library(dialect, spec.machine) if dialect.compact else {}
         fitted = fit(dialect, planned.program, library)
         check_part_numbers(fitted, spec, library)
@@ -131,7 +137,7 @@ def checked_library(dialect: Any, machine: Any) -> dict[str, str]:
     """
     c = machine.controller
     files: dict[str, str] = dialect.library_files(c.library_number, c.variable_base,
-                                                  machine.units)
+                                                  machine.units, c.options)
     for number in range(c.library_number, c.library_number + len(files)):
         machine.check_program_number(
             number, f"{machine.source}: controller.library_number (O{number})")
@@ -148,13 +154,13 @@ def write_library(folder: Path, files: dict[str, str]) -> None:
 
 def _macros(args: argparse.Namespace) -> int:
     from probegen.dialects import get_dialect
-    from probegen.machine.profile import load_profile
+    from probegen.machine.profile import DEFAULT_OPTIONS, load_profile
 
     dialect = get_dialect(args.dialect)
     if args.machine:
         files = checked_library(dialect, load_profile(args.machine))
-    else:
-        files = dialect.library_files(8000, 100, "mm")
+    else:  # a profile that says nothing: the dialect's standard options
+        files = dialect.library_files(8000, 100, "mm", DEFAULT_OPTIONS.get(dialect.NAME, ()))
     write_library(Path(args.output), files)
     return ExitCode.OK
 

@@ -69,6 +69,9 @@ class Dialect:
     MACRO_LIBRARY: ClassVar[bool] = False
     """Whether the dialect has a subprogram library a compact program calls
     (:meth:`library_files`; ``compact`` selects that form)."""
+    COMPACT_DEFAULT: ClassVar[bool] = False
+    """Whether ``compile`` writes the compact form unless ``--inline`` is given (Fanuc and
+    Haas; LinuxCNC's library is opt-in with ``--compact``)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -228,9 +231,11 @@ class Dialect:
         self.check_size(text)
         return text
 
-    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
+    def library_files(self, first: int, base: int, units: str,
+                      options: tuple[str, ...] = ()) -> dict[str, str]:
         """File name -> text of the macro library's subprograms, numbered from ``first``,
-        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``).
+        for programs with variable base ``base`` in ``units`` (``mm``, ``inch``) on a
+        control with ``options`` (``[controller] options``).
 
         Raises:
             UnsupportedError: the dialect has no library (``MACRO_LIBRARY`` false).

@@ -41,15 +41,21 @@ from probegen import ir
 from probegen.dialects.fanuc_actions import lower_action, offset_words
 from probegen.dialects.macro_b import SCRATCH, MacroB
 from probegen.dialects.macro_library import (
-    ERROR_BLOCK,
-    FAILED_MOVE,
+    COMMONS,
+    FEATURE,
+    FEATURE_DIGITS,
+    KIND,
+    KINDS,
     MOVE,
+    MOVE_COUNT,
     POINT,
+    POINT_COUNT,
     POSITION_FEED,
     PROBE_FEED,
     TOUCH,
     Library,
 )
+from probegen.errors import UnsupportedError
 
 
 class Fanuc(MacroB):
@@ -67,15 +73,20 @@ class Fanuc(MacroB):
     feed override at 100 % (bit 0, feed hold, and bit 2, exact stop, stay enabled: the
     operator can still stop the machine)."""
     MACRO_LIBRARY: ClassVar[bool] = True
+    COMPACT_DEFAULT: ClassVar[bool] = True
 
-    def library_for(self, first: int, base: int, units: str) -> Library:
+    def library_for(self, first: int, base: int, units: str,
+                    options: tuple[str, ...] = ()) -> Library:
         """The macro library from O``first`` for programs with variable base ``base`` in
-        ``units``."""
+        ``units`` on a control with ``options`` (``#3004``: the touch is locked)."""
         self.units = units
-        return Library(first, base, self.num(self.scale(self.CHECK_SUM)))
+        lock, unlock = self.lock_blocks(options)
+        return Library(first, base, self.num(self.scale(self.CHECK_SUM)),
+                       self.DPRNT_FORMAT[units], lock, unlock)
 
-    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
-        files = self.library_for(first, base, units).files()
+    def library_files(self, first: int, base: int, units: str,
+                      options: tuple[str, ...] = ()) -> dict[str, str]:
+        files = self.library_for(first, base, units, options).files()
         for text in files.values():
             self.check_lines(text)
         return files
@@ -93,20 +104,27 @@ class Fanuc(MacroB):
         nodes = ir.walk(program.body)
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
-        self.lib = self.library_for(s.library_number, s.variable_base, s.units)
-        self.tail: list[dict[str, Any]] = []
+        self.lib = self.library_for(s.library_number, s.variable_base, s.units,
+                                    s.options or ())
         blocks = [self.block(node) for node in nodes]
         if self.compact:
-            blocks = self.error_blocks(self.points(blocks))
+            blocks = self.bind(self.points(blocks))
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
             "reset_codes": self.reset_block(s),
             "ball": self.length(s.ball_diameter),
             "clearance": self.length(s.clearance_z),
-            "first_var": self.base, "last_var": self.base + SCRATCH + 3,
+            "first_var": self.base, "last_var": self.last_variable(self.base),
+            "version": 2 if self.compact else 1,
             "work_offset": self.work_offset_word(s.work_offset),
-            "library": self.library_header(s) if self.compact else None, "tail": self.tail,
+            "library": self.library_header(s) if self.compact else None,
         }
+
+    def last_variable(self, base: int) -> int:
+        """The last common variable a program with variable base ``base`` uses: the
+        inline form's scratch ends at ``#base+93``, the compact form's commons at
+        ``#base+95`` (``macro_library.COMMONS``)."""
+        return base + (COMMONS[-1] if self.compact else SCRATCH + 3)
 
     # -- the compact form: G65 calls to the macro library ------------------------------
     def library_header(self, s: ir.Setup) -> dict[str, Any]:
@@ -115,16 +133,16 @@ class Fanuc(MacroB):
                 "feeds": [f"{self.lib.common(PROBE_FEED)}={self.feed(s.probe_feed)}",
                           f"{self.lib.common(POSITION_FEED)}={self.feed(s.position_feed)}"]}
 
-    def call(self, offset: int, point: ir.Point, index: int) -> dict[str, Any]:
-        """``G65 P.. X.. Y.. Z.. I<index>.`` of library subprogram ``offset``."""
+    def call(self, offset: int, point: ir.Point) -> dict[str, Any]:
+        """``G65 P.. X.. Y.. Z..`` of library subprogram ``offset``."""
         xyz = [short(self.addr(c)) for c in self.commanded(point)]
-        call = {"p": self.lib.number(offset), "xyz": xyz, "i": f"I{index}."}
+        call = {"p": self.lib.number(offset), "xyz": xyz, "words": ""}
         return {**call, "line": call_line(call)}
 
     def points(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
         """Each protected move, touch and retract to the move's target, one call to the
-        library's point macro (the skip position it leaves in ``#5061``-``#5063`` is
-        printed after it, as the inline program prints it before the retract)."""
+        library's point macro (which prints the skip position before it moves back, as
+        the inline program prints it before the retract)."""
         out: list[dict[str, Any]] = []
         k = 0
         while k < len(blocks):
@@ -134,9 +152,11 @@ class Fanuc(MacroB):
                     and [short(v) for v in back["xyz"]] == move["xyz"]
                     and move["feature"] == touch["feature"]
                     and not stored_in(touch["stores"], back["xyz"])):
-                u, v, w = touch["xyz"]
-                words = f"U{u}V{v}W{w}{touch['i']}J{move['i'][1:]}"
-                call = {**touch, "p": self.lib.number(POINT), "xyz": move["xyz"], "i": words}
+                words = "".join(f"{a}{end}" for a, end, start in
+                                zip("UVW", touch["xyz"], move["xyz"], strict=True)
+                                if end != start)  # the macro takes X Y Z for them
+                call = {**touch, "p": self.lib.number(POINT), "xyz": move["xyz"],
+                        "words": words, "move": move["move"]}
                 call["line"] = call_line(call)
                 if len(call["line"]) <= self.LINE_LENGTH:  # else the three calls
                     out.append(call)
@@ -146,28 +166,48 @@ class Fanuc(MacroB):
             k += 1
         return out
 
-    def error_blocks(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
-        """Each run of calls serving one feature, preceded by the number of its error
-        block (``#base+92``): where a library macro returns when its move fails
-        (``dialects/macro_library.py``).  The error blocks themselves go after ``M30``
-        (``self.tail``), out of the program's flow."""
+    def bind(self, blocks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """The commons each call needs, set where they do not already hold it.
+
+        A feature's first call is preceded by ``DPRNT[FEAT*<id>*<n>]``, binding its
+        number to its id in the log.  Before every call the feature number, the record
+        kind and the counters (the call's move or point number less one: the macro
+        counts up before its G31) are assigned only where the values the earlier calls
+        left differ, so a feature's calls in the plan's order set nothing.
+        """
         out: list[dict[str, Any]] = []
-        open_feature = ""
+        held: dict[int, int] = {}
+        numbers: dict[str, int] = {}
         for b in blocks:
-            if b.get("call") and b["feature"] != open_feature:
-                open_feature = b["feature"]
-                self.tail.append(self.error_block(open_feature))
-                out.append({"kind": "assign", "var": self.lib.common(ERROR_BLOCK),
-                            "value": str(self.tail[-1]["notouch"])})
+            if not b.get("call"):
+                out.append(b)
+                continue
+            feature = b["feature"]
+            if feature not in numbers:
+                numbers[feature] = len(numbers) + 1
+                if numbers[feature] >= 10 ** FEATURE_DIGITS:
+                    raise UnsupportedError(
+                        f"dialect {self.NAME!r}: a compact program prints at most "
+                        f"{10 ** FEATURE_DIGITS - 1} features (their numbers have "
+                        f"{FEATURE_DIGITS} digits), found more at {feature}; split the spec "
+                        "or compile --inline")
+                out.append({"kind": "bind", "feature": feature, "number": numbers[feature]})
+            wanted = {FEATURE: numbers[feature]}
+            if "move" in b:
+                wanted[MOVE_COUNT] = b["move"] - 1
+            if "tag" in b:
+                wanted[KIND] = KINDS[b["tag"]]
+                wanted[POINT_COUNT] = b["index"] - 1
+            for offset in sorted(wanted):
+                if held.get(offset) != wanted[offset]:
+                    out.append({"kind": "assign", "var": self.lib.common(offset),
+                                "value": str(wanted[offset])})
+            held.update(wanted)
+            for counter in (MOVE_COUNT, POINT_COUNT):
+                if counter in wanted:
+                    held[counter] += 1
             out.append(b)
         return out
-
-    def error_block(self, feature: str) -> dict[str, Any]:
-        notouch = self.next_label()
-        self.next_label()  # the collision block: the library returns to #base+92 + 1
-        return {"kind": "errors", "feature": feature, "notouch": notouch,
-                "collision": notouch + 1,
-                "index": self.lib.common(FAILED_MOVE)}
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One IR node as the values its template macro prints."""
@@ -223,7 +263,7 @@ class Fanuc(MacroB):
         self.moves[feature] = self.moves.get(feature, 0) + 1
         if self.compact:
             return {"kind": "call_move", "call": True, "feature": feature,
-                    **self.call(MOVE, node.target, self.moves[feature])}
+                    "move": self.moves[feature], **self.call(MOVE, node.target)}
         return {"kind": "protected", "set": self.targets(node.target),
                 "feature": feature, "index": self.moves[feature],
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.position_feed),
@@ -239,7 +279,7 @@ class Fanuc(MacroB):
             return {"kind": "call_touch", "call": True, "tag": node.role.value,
                     "feature": node.feature, "index": node.index, "stores": stores,
                     "fmt": self.DPRNT_FORMAT[self.units],
-                    **self.call(TOUCH, end, node.index)}  # type: ignore[arg-type]
+                    **self.call(TOUCH, end)}  # type: ignore[arg-type]
         return {"kind": "touch", "set": self.targets(end),  # type: ignore[arg-type]
                 "t": [self.scratch(k) for k in range(4)], "f": self.feed(self.setup.probe_feed),
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label(),
@@ -248,12 +288,18 @@ class Fanuc(MacroB):
                 **self.skip_lock()}
 
     def skip_lock(self) -> dict[str, list[str]]:
-        """The blocks before (``lock``) and after (``unlock``) a touch's G31 that hold
-        single block and feed override (``SKIP_LOCK``), empty without option ``#3004``."""
-        if "#3004" not in (self.setup.options or ()):
-            return {"lock": [], "unlock": []}
-        return {"lock": [f"{v}={value}" for v, value in self.SKIP_LOCK],
-                "unlock": [f"{v}=0" for v, _ in reversed(self.SKIP_LOCK)]}
+        """The blocks before (``lock``) and after (``unlock``) an inline touch's G31."""
+        lock, unlock = self.lock_blocks(self.setup.options or ())
+        return {"lock": list(lock), "unlock": list(unlock)}
+
+    def lock_blocks(self, options: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The blocks before and after a touch's G31 that hold single block and feed
+        override (``SKIP_LOCK``), in the inline form and in the library's touch alike;
+        empty without option ``#3004``."""
+        if "#3004" not in options:
+            return (), ()
+        return (tuple(f"{v}={value}" for v, value in self.SKIP_LOCK),
+                tuple(f"{v}=0" for v, _ in reversed(self.SKIP_LOCK)))
 
     def assign(self, node: ir.Assign) -> dict[str, Any]:
         if node.b is not None:
@@ -265,9 +311,9 @@ class Fanuc(MacroB):
 
 
 def call_line(b: dict[str, Any]) -> str:
-    """The ``G65`` block of a call: program ``p``, X Y Z ``xyz`` and the words ``i``."""
+    """The ``G65`` block of a call: program ``p``, X Y Z ``xyz`` and the other ``words``."""
     x, y, z = b["xyz"]
-    return f"G65P{b['p']}X{x}Y{y}Z{z}{b['i']}"
+    return f"G65P{b['p']}X{x}Y{y}Z{z}{b['words']}"
 
 
 def stored_in(stores: list[str], xyz: list[str]) -> bool:
@@ -277,11 +323,21 @@ def stored_in(stores: list[str], xyz: list[str]) -> bool:
     return any(re.search(rf"{re.escape(var)}(?!\d)", " ".join(xyz)) for var in written)
 
 
+NUMBER = re.compile(r"(?<![#0-9.])([0-9]*)\.([0-9]*)")
+"""A number with a decimal point (a variable's ``#101`` has none)."""
+
+
 def short(value: str) -> str:
-    """A number without its trailing zeros (``21.0000`` -> ``21.``, ``0.5000`` ->
-    ``0.5``; the decimal point stays, so no control reads it in least input increments);
-    a variable or an expression unchanged."""
-    return value.rstrip("0") if "." in value and "#" not in value else value
+    """A value with the fewest digits that keep it exact: a number (alone or in an
+    expression) without its trailing zeros and its leading zero (``21.0000`` -> ``21.``,
+    ``-0.5000`` -> ``-.5``, ``[#104+8.7500]`` -> ``[#104+8.75]``, ``0.0000`` -> ``0.``);
+    the decimal point stays, so no control reads it in least input increments."""
+    return NUMBER.sub(_short_number, value)
+
+
+def _short_number(m: re.Match[str]) -> str:
+    whole, fraction = m[1].lstrip("0"), m[2].rstrip("0")
+    return f"{whole}.{fraction}" if whole or fraction else "0."
 
 
 def feature_owners(nodes: list[ir.Node]) -> dict[int, str]:

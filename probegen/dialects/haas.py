@@ -14,7 +14,6 @@ from typing import Any, ClassVar
 
 from probegen import ir
 from probegen.dialects.fanuc import Fanuc
-from probegen.dialects.macro_b import SCRATCH
 from probegen.errors import UnsupportedError
 from probegen.ir.actions import describe
 
@@ -78,9 +77,10 @@ class Haas(Fanuc):
         """Refuse a variable range that overlaps one Haas reserves.
 
         Raises:
-            UnsupportedError: the range ``#base-#base+93`` meets ``RESERVED_VARIABLES``.
+            UnsupportedError: the range ``#base`` to :meth:`last_variable` meets
+                ``RESERVED_VARIABLES``.
         """
-        last = base + SCRATCH + 3
+        last = self.last_variable(base)
         for first_reserved, last_reserved, what in self.RESERVED_VARIABLES:
             if base <= last_reserved and first_reserved <= last:
                 raise UnsupportedError(

@@ -127,9 +127,10 @@ class LinuxCnc(Dialect):
         self.errors: dict[str, int] = {}
         self.error_of: str | None = None
 
-    def library_files(self, first: int, base: int, units: str) -> dict[str, str]:
-        """The macro library (:data:`LIBRARY`): named subroutines, so ``first`` and
-        ``base`` do not apply, and the feeds come from the program in its units."""
+    def library_files(self, first: int, base: int, units: str,
+                      options: tuple[str, ...] = ()) -> dict[str, str]:
+        """The macro library (:data:`LIBRARY`): named subroutines, so ``first``, ``base``
+        and ``options`` do not apply, and the feeds come from the program in its units."""
         for text in LIBRARY.values():
             self.check_lines(text)
         return dict(LIBRARY)

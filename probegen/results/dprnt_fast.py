@@ -21,10 +21,11 @@ from probegen.results.dprnt_records import MAX_FEATURE_ID, MAX_INDEX_DIGITS, Cen
 _NUMBER = r"([+-]?[0-9.]+)[ \t]*"
 _XYZ = rf"X[ \t]*{_NUMBER}Y[ \t]*{_NUMBER}Z[ \t]*{_NUMBER}"
 _FEATURE = rf"([A-Z][A-Z0-9]{{0,{MAX_FEATURE_ID - 1}}})[ \t]+"
-_FAST_TOUCH = re.compile(
-    rf"[ \t]*(PT|LOC)[ \t]+{_FEATURE}0*([1-9][0-9]{{0,{MAX_INDEX_DIGITS - 1}}})\.?[ \t]+{_XYZ}"
-)
-"""A well-formed upper-case ``PT``/``LOC`` line, the bulk of every log.
+_INDEX = rf"0*([1-9][0-9]{{0,{MAX_INDEX_DIGITS - 1}}})\.?[ \t]+"
+_FAST_TOUCH = re.compile(rf"[ \t]*(PT|LOC)[ \t]+(?:{_FEATURE}|{_INDEX}){_INDEX}{_XYZ}")
+"""A well-formed upper-case ``PT``/``LOC`` line, the bulk of every log; its feature by
+id or (format V2) by a number a ``FEAT`` line bound before (else the line goes to lark,
+which reports it).
 
 A line it matches in full whose three numbers ``float()`` reads as finite, the grammar
 reads to the same record: a number or an index is matched whole (a shorter match would
@@ -100,7 +101,11 @@ def _read_lines(builder: _Builder, lines: list[str], *, fast: bool) -> None:
     for lineno, clean in enumerate(lines, start=1):
         match = touch_line(clean)
         if match is not None:
-            kind, feature, index, x, y, z = match.groups()
+            kind, feature, number, index, x, y, z = match.groups()
+            if feature is None:
+                binding = builder.bound.get(int(number))
+                feature = "" if binding is None else binding.feature
+        if match is not None and feature:
             try:  # inline: this loop runs once per line of the log
                 xyz = (float(x) + 0.0, float(y) + 0.0, float(z) + 0.0)
             except ValueError:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 import re
-from typing import Any
+from typing import Any, Literal
 
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
@@ -30,22 +30,25 @@ from probegen.results.dprnt_records import (
     Result,
     SerialMark,
     Touch,
+    _Bind,
     _Builder,
     _End,
     _Header,
+    _Numbered,
     _Record,
 )
 
 _UPPER = {c: c - 32 for c in range(ord("a"), ord("z") + 1)}
 """ASCII-only upper-casing: ``str.upper`` would turn 'ſ' into 'S'."""
 
-_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "PGSERIAL", "LOC", "CTR", "PT", "RES", "ERR",
-                              "PGEND"})
+_RECORD_KEYWORDS = frozenset({"PGSTART", "PGCAL", "PGSERIAL", "FEAT", "LOC", "CTR", "PT", "RES",
+                              "ERR", "PGEND"})
 """The keywords that start a record."""
 
 _NAMES = {
     "FEATURE": "a feature id",
     "INDEX": "an index",
+    "FEATNUM": "a feature number",
     "UNUMBER": "a number",
     "SIGN": "a sign",
     "AX": "'X'",
@@ -100,17 +103,23 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
     def end(self, c: list[Token]) -> _End:
         return _End(_program(c[1]))
 
-    def loc(self, c: list[Any]) -> Touch:
-        return Touch("LOC", _feature(c[1]), _index(c[2]), c[3], 0)
+    def feat(self, c: list[Token]) -> _Bind:
+        return _Bind(_feature(c[1]), _number(c[2]), c[2].column or 0)
 
-    def pt(self, c: list[Any]) -> Touch:
-        return Touch("PT", _feature(c[1]), _index(c[2]), c[3], 0)
+    def loc(self, c: list[Any]) -> Touch | _Numbered:
+        return _touch("LOC", c)
+
+    def pt(self, c: list[Any]) -> Touch | _Numbered:
+        return _touch("PT", c)
 
     def ctr(self, c: list[Any]) -> Centre:
         return Centre(_feature(c[1]), c[2], 0)
 
-    def err(self, c: list[Token]) -> ProgramError:
+    def err(self, c: list[Token]) -> ProgramError | _Numbered:
         code: ErrorCode = str(c[1])  # type: ignore[assignment]
+        if c[2].type == "FEATNUM":
+            return _Numbered(_number(c[2]), c[2].column or 0,
+                             ProgramError(code, "", _index(c[3]), 0))
         return ProgramError(code, _feature(c[2]), _index(c[3]), 0)
 
     def res(self, c: list[Any]) -> Result:
@@ -127,6 +136,14 @@ class _ToRecord(Transformer[Token, "_Record | None"]):
         if not math.isfinite(value):
             raise _FieldError(c[0].column or 0, f"number '{''.join(c)}' is out of range")
         return value + 0.0  # -0.0 -> 0.0
+
+
+def _touch(kind: Literal["PT", "LOC"], c: list[Any]) -> Touch | _Numbered:
+    """A touch naming its feature by id, or by number (format V2, resolved by the
+    builder)."""
+    if c[1].type == "FEATNUM":
+        return _Numbered(_number(c[1]), c[1].column or 0, Touch(kind, "", _index(c[2]), c[3], 0))
+    return Touch(kind, _feature(c[1]), _index(c[2]), c[3], 0)
 
 
 def _feature(tok: Token) -> str:
@@ -154,6 +171,10 @@ def _digits(tok: Token, skip: int, what: str, ndigits: int = MAX_INDEX_DIGITS) -
 
 def _index(tok: Token) -> int:
     return _digits(tok, 0, "an index")
+
+
+def _number(tok: Token) -> int:
+    return _digits(tok, 0, "a feature number")
 
 
 def _program(tok: Token) -> int:
@@ -205,7 +226,7 @@ def _expected_at(clean: str, column: int) -> set[str]:
 def _expected_names(names: set[str]) -> str:
     """Return readable text for a set of terminal names."""
     if _RECORD_KEYWORDS <= names:
-        return "a record (PGSTART, PGCAL, PGSERIAL, LOC, CTR, PT, RES, ERR or PGEND)"
+        return "a record (PGSTART, PGCAL, PGSERIAL, FEAT, LOC, CTR, PT, RES, ERR or PGEND)"
     if "UNUMBER" in names:
         names = names - {"SIGN"}
     if "$END" in names:

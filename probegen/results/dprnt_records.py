@@ -19,8 +19,14 @@ from typing import Literal
 from probegen.errors import Diagnostic
 from probegen.ir.identity import IDENTITY_DIGITS
 
-FORMAT_VERSION = 1
-"""The log format version this reader understands (the ``V1`` of ``PGSTART``)."""
+FORMAT_VERSION = 2
+"""The newest log format version this reader understands (the ``V2`` of ``PGSTART``);
+it reads every version in ``FORMAT_VERSIONS``."""
+FORMAT_VERSIONS = (1, 2)
+"""V1: touches name their feature by id; V2 adds ``FEAT <id> <n>``, after which a touch
+may name its feature by the number ``n`` (``docs/dprnt-format.md``)."""
+FEATURE_VERSION = 2
+"""The first version with ``FEAT`` records."""
 
 MAX_FEATURE_ID = 16
 """Longest feature id the Fanuc dialect prints."""
@@ -129,6 +135,24 @@ class SerialMark:
     run: int = 0
 
 
+@dataclass(frozen=True, slots=True)
+class FeatureBinding:
+    """A ``FEAT`` record (format V2): feature number ``number`` stands for feature
+    ``feature`` in the ``PT``/``LOC`` records that follow (in this run and the later ones).
+
+    Attributes:
+        feature: feature id, upper case.
+        number: 1 to 999999.
+        line: 1-based line number in the log.
+        run: the program run it belongs to (see :attr:`Touch.run`).
+    """
+
+    feature: str
+    number: int
+    line: int
+    run: int = 0
+
+
 ErrorCode = Literal["NOTOUCH", "COLLISION", "OUTTOL", "BIGCORR", "BADFIT"]
 """``ERR`` codes: no skip signal, signal on a guarded move, a feature out of tolerance,
 a tool correction beyond its maximum, touches that fit no circle."""
@@ -196,6 +220,8 @@ class DprntLog:
         runs: one per run, in log order (see :class:`Run`).
         calibrations: ``PGCAL`` records in log order.
         serials: ``PGSERIAL`` records in log order.
+        features: ``FEAT`` records in log order (format V2); the touches that named a
+            feature by number already carry its id.
     """
 
     source: str
@@ -210,6 +236,7 @@ class DprntLog:
     runs: tuple[Run, ...] = ()
     calibrations: tuple[CalibrationMark, ...] = ()
     serials: tuple[SerialMark, ...] = ()
+    features: tuple[FeatureBinding, ...] = ()
 
     @property
     def serial(self) -> str | None:
@@ -251,8 +278,27 @@ class _End:
     program: int
 
 
+@dataclass(frozen=True, slots=True)
+class _Bind:
+    """A ``FEAT`` line as parsed; the builder checks it and keeps a FeatureBinding."""
+
+    feature: str
+    number: int
+    column: int
+
+
+@dataclass(frozen=True, slots=True)
+class _Numbered:
+    """A ``PT``/``LOC``/``ERR`` line naming its feature by number (``record`` has no
+    feature yet); the builder resolves it."""
+
+    number: int
+    column: int
+    record: Touch | ProgramError
+
+
 _Record = (Touch | Centre | ProgramError | Result | CalibrationMark | SerialMark | _Header
-           | _End)
+           | _End | _Bind | _Numbered)
 
 
 class _Builder:
@@ -273,6 +319,9 @@ class _Builder:
         self.results: list[Result] = []
         self.calibrations: list[CalibrationMark] = []
         self.serials: list[SerialMark] = []
+        self.features: list[FeatureBinding] = []
+        self.bound: dict[int, FeatureBinding] = {}
+        """Feature number -> its binding: the id a numbered touch stands for."""
         self.diagnostics: list[Diagnostic] = []
         self.starts: dict[int, _Header] = {}
         self.start_lines: dict[int, int] = {}
@@ -297,6 +346,17 @@ class _Builder:
         if isinstance(rec, _End):
             self._end(rec)
             return
+        if isinstance(rec, _Bind):
+            self._bind(rec)
+            return
+        if isinstance(rec, _Numbered):
+            binding = self.bound.get(rec.number)
+            if binding is None:
+                self.diagnose(f"expected a feature number bound by an earlier FEAT record, "
+                              f"found {rec.number} (no FEAT <id> {rec.number} before)",
+                              rec.column)
+                return
+            rec = dataclasses.replace(rec.record, feature=binding.feature)
         rec = dataclasses.replace(rec, line=self.lineno, run=self.run)
         if isinstance(rec, Touch):
             self.touches.append(rec)
@@ -310,6 +370,24 @@ class _Builder:
             self.serials.append(rec)
         else:
             self.errors.append(rec)
+
+    def _bind(self, rec: _Bind) -> None:
+        """Bind a feature number to its id (again after a restart: the first binding
+        stays); a number bound to another id is reported and rebound (the later records
+        mean the later binding)."""
+        head = self.starts.get(self.run)
+        if head is not None and head.version < FEATURE_VERSION:
+            self.diagnose(f"expected format version V{FEATURE_VERSION} or later for a FEAT "
+                          f"record, found V{head.version} (line {self.start_lines[self.run]})")
+        earlier = self.bound.get(rec.number)
+        if earlier is not None and earlier.feature != rec.feature:
+            self.diagnose(f"expected feature number {rec.number} to stand for "
+                          f"{earlier.feature} (FEAT on line {earlier.line}), found "
+                          f"{rec.feature}", rec.column)
+        binding = FeatureBinding(rec.feature, rec.number, self.lineno, self.run)
+        if earlier is None or earlier.feature != rec.feature:
+            self.bound[rec.number] = binding
+        self.features.append(binding)
 
     def place(self, lineno: int, clean: str) -> None:
         """Check the place of a record read without :meth:`add` (see ``_read_lines``)."""
@@ -329,8 +407,9 @@ class _Builder:
             # the run still starts: the wrong identity is kept and refused by ingest
             self.diagnose(f"expected a program identity of H and {IDENTITY_DIGITS} hex "
                           f"digits, found '{rec.identity}'", rec.identity_column)
-        if rec.version != FORMAT_VERSION:
-            message = f"expected format version V{FORMAT_VERSION}, found V{rec.version}"
+        if rec.version not in FORMAT_VERSIONS:
+            message = (f"expected format version V{FORMAT_VERSIONS[0]} to "
+                       f"V{FORMAT_VERSIONS[-1]}, found V{rec.version}")
             self.diagnose(message, rec.version_column)
         if self.started or self.headless_reported:
             self.run += 1
@@ -377,6 +456,7 @@ class _Builder:
             runs=tuple(self._run(k) for k in range(self.run + 1)),
             calibrations=tuple(self.calibrations),
             serials=tuple(self.serials),
+            features=tuple(self.features),
         )
 
     def _run(self, k: int) -> Run:
