@@ -127,7 +127,7 @@ def test_split_program_logs_the_unsplit_bytes(dialect: str, compact: bool,
     """The driver, running its parts (and the library) from its folder, logs what the
     unsplit program logs, byte for byte, so results.json is the same; ingest finds the
     planted 0.03 mm oversize of the bore."""
-    spec = load_spec(spec_with(tmp_path, "program_size = 2500" if compact else ""))
+    spec = load_spec(spec_with(tmp_path, "program_size = 1200" if compact else ""))
     whole, split = fitted(spec, dialect, compact)
     assert len(split.parts) == 2 and ("G65P8002" in split.parts[0].text) is compact
     folder = library(tmp_path / "run", dialect) if compact else tmp_path / "run"
@@ -151,7 +151,7 @@ def test_split_program_logs_the_unsplit_bytes(dialect: str, compact: bool,
 def test_cli_writes_and_sims_the_split_program(in_repo: Path, tmp_path: Path,
                                                capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "out"
-    assert main(["compile", str(SPEC), "-o", str(out)]) == ExitCode.OK
+    assert main(["compile", str(SPEC), "--inline", "-o", str(out)]) == ExitCode.OK
     said = capsys.readouterr().out
     assert sorted(p.name for p in out.iterdir()) == ["O1003.nc", "O1004.nc", "bore_block.nc"]
     assert "split bore_block.nc into a driver and 2 parts" in said
@@ -202,19 +202,19 @@ def test_the_files_together_must_fit_program_memory(tmp_path: Path) -> None:
 
 def test_the_library_counts_in_program_memory(tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
-    spec = spec_with(tmp_path, "program_size = 0\nprogram_memory = 3500")
+    spec = spec_with(tmp_path, "program_size = 0\nprogram_memory = 2000")
     assert main(["compile", str(spec), "--compact", "-o", str(tmp_path / "o")]) == \
         UnsupportedError.exit_code
     err = capsys.readouterr().err
     assert re.search(r"the programs are \d+ bytes together \(the program \d+, O8000 \d+, "
-                     r"O8001 \d+, O8002 \d+\), expected at most 3500", err)
+                     r"O8001 \d+, O8002 \d+\), expected at most 2000", err)
     assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.parametrize(("controller", "number", "message"), [
     ("", 8998, "part 2 of the split program .O8998 \\+ 2.: expected a program number in "
                "O1-O8999"),
-    ("program_numbers = [1, 9999]\nlibrary_number = 7000\nprogram_size = 2500", 6999,
+    ("program_numbers = [1, 9999]\nlibrary_number = 7000\nprogram_size = 1200", 6999,
      "part 1 of the split program .O6999 \\+ 1.: expected a number apart from the macro "
      "library's, found O7000"),
 ])
@@ -223,7 +223,7 @@ def test_part_numbers_are_checked(tmp_path: Path, capsys: pytest.CaptureFixture[
     spec = spec_with(tmp_path, controller)
     spec.write_text(spec.read_text().replace("number = 1002", f"number = {number}"))
     argv = ["compile", str(spec), "-o", str(tmp_path / "o"), "-d", "fanuc"]
-    assert main(argv + ["--compact"] * ("library" in message)) == ExitCode.SPEC
+    assert main(argv + ["--compact" if "library" in message else "--inline"]) == ExitCode.SPEC
     assert re.search(message, capsys.readouterr().err)
 
 
@@ -233,10 +233,12 @@ def test_compile_refuses_two_dialects_parts_in_one_file(tmp_path: Path,
     """With G50.1 declared the Haas parts say G100 where Fanuc's say G50.1: both would be
     O1003.nc."""
     spec = spec_with(tmp_path, 'options = ["G68", "#3004", "G50.1"]')
-    argv = ["compile", str(spec), "-o", str(tmp_path / "o"), "-d", "fanuc", "-d", "haas"]
+    argv = ["compile", str(spec), "--inline", "-o", str(tmp_path / "o"), "-d", "fanuc", "-d",
+            "haas"]
     assert main(argv) == ExitCode.ERROR
     assert "O1003.nc: expected one text per part file" in capsys.readouterr().err
-    assert main(["compile", str(spec), "-o", str(tmp_path / "h"), "-d", "haas"]) == 0
+    assert main(["compile", str(spec), "--inline", "-o", str(tmp_path / "h"), "-d",
+                 "haas"]) == 0
 
 
 # -- common variables --------------------------------------------------------------------

@@ -75,6 +75,15 @@ class Fanuc(MacroB):
     MACRO_LIBRARY: ClassVar[bool] = True
     COMPACT_DEFAULT: ClassVar[bool] = True
 
+    def __init__(self) -> None:
+        super().__init__()
+        self.feature_numbers: dict[str, int] = {}
+        """The numbers the last compact program bound its features to (``FEAT`` records),
+        in the order of their first calls."""
+        self.preset_numbers: dict[str, int] = {}
+        """Numbers to bind features to instead (``split`` gives every part the whole
+        program's ``feature_numbers``, so the parts print the whole program's log)."""
+
     def library_for(self, first: int, base: int, units: str,
                     options: tuple[str, ...] = ()) -> Library:
         """The macro library from O``first`` for programs with variable base ``base`` in
@@ -177,6 +186,7 @@ class Fanuc(MacroB):
         """
         out: list[dict[str, Any]] = []
         held: dict[int, int] = {}
+        preset = self.preset_numbers
         numbers: dict[str, int] = {}
         for b in blocks:
             if not b.get("call"):
@@ -184,7 +194,7 @@ class Fanuc(MacroB):
                 continue
             feature = b["feature"]
             if feature not in numbers:
-                numbers[feature] = len(numbers) + 1
+                numbers[feature] = preset.get(feature, len(numbers) + 1)
                 if numbers[feature] >= 10 ** FEATURE_DIGITS:
                     raise UnsupportedError(
                         f"dialect {self.NAME!r}: a compact program prints at most "
@@ -207,6 +217,7 @@ class Fanuc(MacroB):
                 if counter in wanted:
                     held[counter] += 1
             out.append(b)
+        self.feature_numbers = numbers
         return out
 
     def block(self, node: ir.Node) -> dict[str, Any]:

@@ -300,6 +300,7 @@ def part_text(dialect: Fanuc, program: ir.Program, start: int, end: int, k: int)
                      (*pose, *body[start:end]))
     fresh = type(dialect)()
     fresh.compact = dialect.compact
+    fresh.preset_numbers = dialect.feature_numbers  # the whole program's (fit generated it)
     return subprogram(fresh.generate(sub), s, k)
 
 
@@ -328,6 +329,7 @@ def driver(dialect: Fanuc, program: ir.Program, parts: tuple[Part, ...]) -> str:
     between them; its header comment names every part's file and features."""
     s = program.setup
     fresh = type(dialect)()
+    fresh.compact = dialect.compact  # the log header's format version is the parts'
     lines = fresh.generate(ir.Program(s, ())).split("\n")
     limit = fresh.line_limit()[0]
     notes = [f"(RUNS {len(parts)} PARTS WITH M98, FILES BESIDE IT:)"]
