@@ -150,6 +150,8 @@ def format_param(param: Param) -> str:
 
 def format_statement(statement: Statement) -> str:
     """Return canonical DMIS text for ``statement``; it parses back to the same statement."""
+    if statement.major == "" and statement.label is not None:
+        return f"({statement.label.name})"  # a program line label
     head = f"{statement.label}={statement.major}" if statement.label else statement.major
     return f"{head}/{_join(statement.params)}" if statement.params else head
 
@@ -202,6 +204,23 @@ class _Builder(Transformer[Token, Any]):
     def statement(self, target: Any, major: Token, _slash: Any, params: Any) -> _Raw:
         label, first = target if target else (None, major)
         return _Raw(0, first.start_pos or 0, label, major.upper(), params or ())
+
+    def variable_statement(self, target: tuple[Param, Token], major: Token, _slash: Any,
+                           params: tuple[Param, ...]) -> _Raw:
+        """``X=MAJOR/p1,...`` (a variable target) is read as ``MAJOR/X=p1,...``."""
+        var, first = target
+        return _Raw(0, first.start_pos or 0, None, major.upper(),
+                    (Expr("=", (var, params[0])), *params[1:]))
+
+    def variable(self, name: Token) -> tuple[Param, Token]:
+        return name.upper(), name
+
+    def variable_index(self, name: Token, indices: tuple[Param, ...]) -> tuple[Param, Token]:
+        return Expr("[]", (name.upper(), *indices)), name
+
+    def jump_label(self, name: Token) -> _Raw:
+        """``(name)``: a program line label (the target of ``JUMPTO``), major word ``""``."""
+        return _Raw(0, name.start_pos or 0, Label("", name.upper()), "", ())
 
     def target(self, kind: Token, name: Param) -> tuple[Label, Token]:
         """Return the label and the token where the statement starts."""
@@ -439,11 +458,14 @@ _CODE, _STRING, _COMMENT = 0, 1, 2
 
 _STATEMENT_START = re.compile(
     r"[ \t]*(?:\w+[ \t]*\([^()\n]*\)[ \t]*=|[A-Za-z]\w*[ \t]*/"
+    r"|\w+[ \t]*(?:\[[^\]\n]*\])?[ \t]*=[ \t]*[A-Za-z]\w*[ \t]*/"
+    r"|\([ \t]*\w+[ \t]*\)[ \t]*(?:\$\$|$)"
     r"|(?:ENDMES|ENDFIL|ENDGO|ENDMAC|ENDDO|ENDIF|ELSE|ENDSEL|ENDCAS|DFTCAS|ENDAT|ENDXTN"
     r"|ENDSIMREQT|PAUSE|RMEAS)[ \t]*(?:\$\$|$))",
     re.IGNORECASE,
 )
-"""A physical line that starts a statement: a wrapped comment never goes on onto it."""
+"""A physical line that starts a statement (``X=ASSIGN/...`` and a ``(label)`` line
+included): a wrapped comment never goes on onto it."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -551,6 +573,8 @@ def _parse_range(joined: Spliced, start: int, stop: int, source: str) -> list[An
         items = cast(list[Any], _parser().parse(chunk))
     except UnexpectedInput as exc:
         raise _syntax_error(exc, joined, start, source) from None
+    items = [replace(item, start=chunk.rfind("(", 0, item.start))
+             if isinstance(item, _Raw) and item.major == "" else item for item in items]
     if start:
         items = [replace(item, start=item.start + start, end=item.end + start)
                  if isinstance(item, _Raw) else replace(item, start=item.start + start)
@@ -669,7 +693,7 @@ def _allowed(exc: UnexpectedCharacters) -> set[str]:
 
 def _expected_list(terminals: set[str]) -> str:
     """Return ``"a, b or c"`` for the expected terminals; operators become one entry."""
-    terminals = terminals - {"LABELREF"}  # accepted only where a word is: "a word" says it
+    terminals = terminals - {"LABELREF", "LOGICAL"}  # accepted where a word is: "a word" says it
     if "STAR" in terminals:  # after an operand: any binary operator may follow
         terminals = (terminals - _OPERATORS_AFTER_OPERAND) | {"OPERATOR"}
     return readable_list(terminals, _READABLE)

@@ -241,7 +241,8 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
              tool: int = 20, home: Vec3 = HOME,
              work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
              feed_override: float = 100.0,
-             program_dir: Path | None = None) -> SimResult:
+             program_dir: Path | None = None,
+             answers: dict[str, str | int | float] | None = None) -> SimResult:
     """Run program text (``kind`` ``"macrob"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -264,7 +265,7 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
 
-        dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
+        dres = run_dmis(text, CmmAdapter(vm), source=source, home=home, answers=answers)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
         return SimResult(dres.output, alarm, len(vm.touches))
     from probegen.sim.macrob.base import control_settings

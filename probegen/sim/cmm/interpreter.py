@@ -33,6 +33,8 @@ Conventions (details in the modules named):
   the output written until then (without ``ENDFIL``) and the alarm with its line.
 * Tolerances: :mod:`probegen.sim.cmm.tolerances`; output format:
   :mod:`probegen.sim.cmm.output`.
+* Variables, expressions, IF, DO, SELECT, JUMPTO, macros and TEXT/QUERY:
+  :mod:`probegen.dmis.execute` (values measured here are read by ``OBTAIN``).
 * Accepted and ignored: :data:`NO_OPS`.  Anything else the VM cannot execute raises
   ``UnsupportedError`` (with source and line) unless ``skip_unsupported=True``; then
   each such statement is listed in :attr:`DmisRunResult.skipped`, a MEAS block with a
@@ -43,11 +45,12 @@ Conventions (details in the modules named):
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from probegen.dmis.execute import execute, is_control
 from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis_all
 from probegen.errors import ProbegenError, UnsupportedError
 from probegen.geometry.frames import FloatArray, unit
@@ -71,7 +74,7 @@ from probegen.sim.cmm.features import (
     vec3,
 )
 from probegen.sim.cmm.measure import do_feat, do_meas, do_tol
-from probegen.sim.cmm.output import echo, feature_text, tolerance_text
+from probegen.sim.cmm.output import StateHost, echo, feature_text, tolerance_text
 from probegen.sim.cmm.state import Cmm, DmisProgramError, MeasBlock, NotExecutable, VmState
 from probegen.sim.cmm.tolerances import ToleranceResult, evaluate
 
@@ -152,7 +155,8 @@ SENSOR_MATCH = 1e-4
 
 def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
              skip_unsupported: bool = False, compensation: Compensation = "feature",
-             home: Vec3 | None = None) -> DmisRunResult:
+             home: Vec3 | None = None, answers: Mapping[str, object] | None = None
+             ) -> DmisRunResult:
     """Run a DMIS program on ``cmm`` and return the output file and the actuals.
 
     Args:
@@ -162,6 +166,7 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
         skip_unsupported: list statements the VM cannot execute instead of raising.
         compensation: ``"feature"`` or ``"vector"`` stylus compensation.
         home: the ball centre's machine position at the start, if known.
+        answers: answers to ``TEXT/QUERY`` by name (:mod:`probegen.dmis.execute`).
 
     Returns:
         The run result; a machine alarm is reported in it, not raised.
@@ -177,8 +182,10 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
     state = VmState(cmm, source or parsed.source, compensation, start)
     skipped: list[SkippedStatement] = []
     alarm, ended = None, False
-    for statement in parsed.statements:
+    for statement in execute(parsed, StateHost(state), answers=answers, notes=state.notes):
         state.statement = statement
+        if is_control(statement):  # variables and control flow: run by execute()
+            continue
         try:
             ended = execute_statement(state, statement)
         except NotExecutable as exc:

@@ -19,7 +19,7 @@ import numpy as np
 
 from probegen.constants import MM_PER_INCH
 from probegen.dmis.reader import Call, Expr, Label, Param, Statement, format_param
-from probegen.errors import ProbegenError
+from probegen.dmis.values import DmisProgramError
 from probegen.geometry.frames import FloatArray
 from probegen.sim.cmm.features import Compensation, DmisFeature, Vec3
 from probegen.sim.cmm.frames import Frame
@@ -58,13 +58,6 @@ class Cmm(Protocol):
             The ball centre where the ball touched the part, or None.
         """
         ...
-
-
-class DmisProgramError(ProbegenError):
-    """A DMIS program that parses but is wrong: an undefined label, a word where a number
-    must be, a MEAS block with too few points.  The message names source and line."""
-
-    exit_code = 6
 
 
 class NotExecutable(Exception):
@@ -148,8 +141,8 @@ class VmState:
         if isinstance(param, int | float) and not isinstance(param, bool):
             return float(param)
         if isinstance(param, str | Expr | Call):
-            raise NotExecutable(f"{what} is {format_param(param)}: variables and "
-                                "expressions are not executed")
+            raise NotExecutable(f"{what} is {format_param(param)}: not a number, nor a "
+                                "declared variable or an expression of them")
         raise self.error(f"{what}: expected a number, found {format_param(param)}")
 
     def numbers(self, params: tuple[Param, ...] | list[Param], what: str) -> list[float]:
