@@ -22,6 +22,7 @@ from probegen.dmis.values import (
     Functions,
     Value,
     Variable,
+    Vector,
     arithmetic,
     relation,
     show,
@@ -185,7 +186,8 @@ class Evaluator:
             return (a and b) if op == ".AND." else (a or b)
         if len(operands) == 1:
             value = self.value(operands[0])
-            return arithmetic("-", 0, value) if op == "-" else arithmetic("+", 0, value)
+            return arithmetic("*", -1 if op == "-" else 1, value) if isinstance(
+                value, Vector) else arithmetic(op, 0, value)
         left, right = self.value(operands[0]), self.value(operands[1])
         if op.startswith("."):
             return relation(op, left, right)

@@ -11,7 +11,7 @@
 
 from __future__ import annotations
 
-from probegen.dmis.reader import Label, Param, Statement, format_param, parse_dmis
+from probegen.dmis.reader import Label, Param, Statement, format_param
 from probegen.dmis.values import EvalError
 from probegen.errors import ProbegenError
 from probegen.sim.cmm.features import SIDED, DmisFeature, Vec3, arr, vec3
@@ -122,7 +122,8 @@ class StateHost:
         self.state = state
 
     def obtain(self, label: Label, index: int) -> tuple[Param, bool]:
-        """Parameter ``index`` (1-based) of ``FA(x) = FEAT/...`` or ``F(x) = FEAT/...``;
+        """Parameter ``index`` (1-based) of ``FA(x) = FEAT/...`` or ``F(x) = FEAT/...``
+        as output (``FEAT/CIRCLE,INNER,CART,x,...``: 1 is CIRCLE, 4 is x), unrounded;
         measured for ``FA``."""
         state = self.state
         if label.kind not in ("FA", "F"):
@@ -132,8 +133,9 @@ class StateHost:
                 state.nominal(label.name)
         except (ProbegenError, NotExecutable) as exc:
             raise EvalError(str(exc)) from None
-        text = feature_text(label.kind, feature, state.frame, state.scale)
-        params = parse_dmis(text + "\n").statements[0].params
+        words: list[Param] = [feature.kind, *([feature.qualifier] if feature.qualifier
+                                                else []), "CART"]
+        params = [*words, *_values(feature, state.frame, state.scale)]  # full precision
         if index > len(params):
             raise EvalError(f"OBTAIN/{label},{index}: {label} has {len(params)} parameters")
         return params[index - 1], label.kind == "FA"
