@@ -530,15 +530,15 @@ def load_answers(path: str) -> dict[str, str | int | float]:
     ``NAME = value`` lines (a string or a number; names case-insensitive).
 
     Raises:
-        SpecError: the file is missing or not TOML; ProbegenError: a value of another kind.
+        SpecError: the file is missing, not TOML, or holds a value of another kind.
     """
-    from probegen.errors import ProbegenError
+    from probegen.errors import SpecError
     from probegen.files import load_toml
 
     out: dict[str, str | int | float] = {}
     for key, value in load_toml(path).items():
         if not isinstance(value, str | int | float) or isinstance(value, bool):
-            raise ProbegenError(f"{path}: answer {key!r}: expected a string or a number, "
+            raise SpecError(f"{path}: answer {key!r}: expected a string or a number, "
                                 f"found {value!r}"[:300])
         out[key.upper()] = value
     return out
