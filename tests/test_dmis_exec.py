@@ -48,7 +48,14 @@ from test_dmis_corpus import CORPUS, HOME, MODEL, PROFILE, model, vm
 
 from probegen.cli.app import main
 from probegen.dmis.execute import MAX_STEPS, execute, is_control
-from probegen.dmis.reader import Label, Param, parse_dmis, read_dmis, read_dmis_text
+from probegen.dmis.reader import (
+    Label,
+    Param,
+    format_statement,
+    parse_dmis,
+    read_dmis,
+    read_dmis_text,
+)
 from probegen.dmis.values import DmisProgramError
 from probegen.errors import ProbegenError, UnsupportedError
 from probegen.post.evaluate import evaluate_log
@@ -440,3 +447,20 @@ def test_mutated_executable_programs_end_in_a_result_or_a_located_error(
 @given(shuffled())
 def test_reordered_statements_end_in_a_result_or_a_located_error(text: str) -> None:
     run_both(text)
+
+
+def test_reader_forms_of_the_executable_half() -> None:
+    """``X=ASSIGN/`` reads as ``ASSIGN/X=``; ``(label)`` is a statement of its own (a
+    wrapped comment never swallows it); ``.TRUE.`` is a word; every form writes back."""
+    text = ("$$ a comment wrapped $\n(LOOP)\n$$ another $\nX = ASSIGN/1\n"
+            "a[2,J]=assign/.true.\nASSIGN/X=1\n")
+    statements = parse_dmis(text).statements
+    assert [(s.line, s.major, s.label) for s in statements] == [
+        (2, "", Label("", "LOOP")), (4, "ASSIGN", None), (5, "ASSIGN", None),
+        (6, "ASSIGN", None)]
+    assert statements[1].params == statements[3].params
+    assert statements[1].text == "X = ASSIGN/1"
+    for s in statements:
+        again = parse_dmis(format_statement(s) + "\n").statements[0]
+        assert (again.label, again.major, again.params) == (s.label, s.major, s.params)
+    assert format_statement(statements[2]) == "ASSIGN/A[2,J]=.TRUE."
