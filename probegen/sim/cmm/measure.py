@@ -102,6 +102,8 @@ def do_meas(state: VmState, st: Statement) -> None:
     if nominal.kind != kind:
         raise state.error(f"MEAS/{kind}: F({nominal.name}) is a {nominal.kind}")
     count = st.params[2]
+    if isinstance(count, float) and count.is_integer():  # a REAL variable holding 7.0
+        count = int(count)
     if not isinstance(count, int) or count < 1:
         raise state.error(f"MEAS: expected a positive point count, found {format_param(count)}")
     state.meas = MeasBlock(nominal, nominal.name, count, st.line)
