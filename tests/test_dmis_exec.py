@@ -24,8 +24,9 @@ virtual machine, to 1e-6 mm; the evaluation of the posted run equals the twin's 
   ``INT``, ``SQRT``, ``ABS``, ``MOD``; a loop of ``(label)`` + ``IF`` + ``JUMPTO``; an
   array; BOOL with ``.AND.``, ``.OR.``, ``.NOT.``, ``.GE.``, ``.LT.``, ``.GT.``, ``.LE.``;
   a feature label from a CHAR variable (``F(nom)``).
-* ``exec_werth_wrapped.dms`` (WinWerth: blanks around ``/``): the program wrapped whole
-  in a ``MACRO`` without a label and a ``BEGIN/END`` block; a 2-D array, nested ``DO``;
+* ``exec_werth_wrapped.dms`` (WinWerth: blanks around ``/``, a ``BEGIN/CHFILE``
+  characterisation block of ``KEY = value`` data): the program wrapped whole in a
+  ``MACRO`` without a label and a ``BEGIN/END`` block; a 2-D array, nested ``DO``;
   ``OBTAIN`` of a nominal (known when posting) and of an actual (measured: used only in
   an ``ASSIGN``, which posting allows).
 """

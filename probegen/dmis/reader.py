@@ -468,6 +468,12 @@ _STATEMENT_START = re.compile(
 included): a wrapped comment never goes on onto it."""
 
 
+_CHFILE_BEGIN = re.compile(r"[ \t]*BEGIN[ \t]*/[ \t]*CHFILE[ \t]*(?:\$\$.*)?$", re.IGNORECASE)
+_CHFILE_END = re.compile(r"[ \t]*END[ \t]*/[ \t]*CHFILE[ \t]*(?:\$\$.*)?$", re.IGNORECASE)
+"""WinWerth's characterisation block: ``BEGIN/CHFILE``, lines of ``KEY = value`` data (not
+DMIS), ``END/CHFILE``; the data lines are read as comments."""
+
+
 @dataclass(frozen=True, slots=True)
 class Spliced:
     """DMIS text with its continued lines joined, and the way back to physical positions.
@@ -508,7 +514,9 @@ def splice(text: str) -> Spliced:
     dropped unless it goes on inside a quoted string (indented continuation lines).
     In a ``$$`` comment a last ``$`` after other text continues the comment: the next
     line is comment text, unless it starts a statement (``WORD/...``, ``X(name)=...``
-    or a bare ``ENDMES``-like word); a banner of ``$`` alone never continues.
+    or a bare ``ENDMES``-like word); a banner of ``$`` alone never continues.  The lines
+    between ``BEGIN/CHFILE`` and ``END/CHFILE`` (WinWerth's characterisation data, not
+    DMIS) are comment text.
     """
     text = text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
     lines = text.split("\n")
@@ -518,13 +526,21 @@ def splice(text: str) -> Spliced:
     starts: list[int] = []
     dropped: list[int] = []
     continues: list[bool] = []
-    offset, mode = 0, _CODE
+    offset, mode, block = 0, _CODE, False
     for index, line in enumerate(lines):
         blanks = len(line) - len(line.lstrip(" \t")) if index and continues[-1] else 0
         if mode == _STRING:
             blanks = 0
         starts.append(offset)
         dropped.append(blanks)
+        fresh = not (index and continues[-1])
+        block = block and not (fresh and _CHFILE_END.match(line))
+        if block:  # a vendor's characterisation data (KEY = value): comment text
+            continues.append(False)
+            pieces.append(f"$$ {line}\n")
+            offset += len(pieces[-1])
+            continue
+        block = fresh and bool(_CHFILE_BEGIN.match(line))
         found = _continuation(line, mode)
         if found is not None and found[0] == _COMMENT and (
             index + 1 == len(lines) or _STATEMENT_START.match(lines[index + 1])
