@@ -33,10 +33,11 @@ run time (``OBTAIN`` of an actual) raises ``UnsupportedError`` naming the statem
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Literal, Protocol
 
+from probegen.dmis.blocks import Blocks
 from probegen.dmis.expressions import Evaluator, Frame, UnknownName
 from probegen.dmis.reader import DmisFile, Expr, Group, Label, Param, Statement, Text
 from probegen.dmis.values import (
@@ -64,11 +65,6 @@ CONTROL = frozenset({
     "DFTCAS", "ENDCAS", "ENDSEL", "MACRO", "ENDMAC", "JUMPTO", "BEGIN", "END",
 })
 """Major words carried out here (``""`` is a ``(label)`` line); ``CALL/M(x)`` too."""
-
-_OPENERS = {"IF": "ENDIF", "DO": "ENDDO", "SELECT": "ENDSEL", "MACRO": "ENDMAC",
-            "BEGIN": "END"}
-_CLOSERS = {close: start for start, close in _OPENERS.items()}
-
 
 def is_control(st: Statement) -> bool:
     """True for a statement :func:`execute` carries out itself (the caller only lists it)."""
@@ -114,7 +110,7 @@ class Run:
     def statements(self) -> Iterator[Statement]:
         """Yield every statement executed, in order, parameters evaluated."""
         stmts = self.program.statements
-        blocks = _Blocks(stmts, self.error)
+        blocks = Blocks(stmts, self.error)
         pc, steps = 0, 0
         while pc < len(stmts):
             st = stmts[pc]
@@ -137,7 +133,7 @@ class Run:
 
     # ---------------------------------------------------------------- control flow
 
-    def control(self, st: Statement, pc: int, blocks: _Blocks) -> int:
+    def control(self, st: Statement, pc: int, blocks: Blocks) -> int:
         """Carry out a control statement; return the next statement index."""
         major, params = st.major, st.params
         if major == "DECL":
@@ -221,7 +217,7 @@ class Run:
         if self.ev.measured is not None and self.measured == "refuse":
             raise self.refuse(st, self.ev.measured, what)
 
-    def start_loop(self, st: Statement, pc: int, blocks: _Blocks) -> int:
+    def start_loop(self, st: Statement, pc: int, blocks: Blocks) -> int:
         if len(st.params) not in (3, 4) or not isinstance(st.params[0], str):
             raise EvalError("DO expects index,start,stop[,step]")
         name = st.params[0]
@@ -259,7 +255,7 @@ class Run:
             return pc + 1
         return start + 1
 
-    def select(self, st: Statement, pc: int, blocks: _Blocks) -> int:
+    def select(self, st: Statement, pc: int, blocks: Blocks) -> int:
         if len(st.params) != 1:
             raise EvalError("SELECT expects one value")
         value = self.ev.evaluate(st.params[0])
@@ -278,7 +274,7 @@ class Run:
                     raise self.error(case_st, str(exc)) from None
         return default + 1 if default is not None else blocks.end[pc] + 1
 
-    def call(self, st: Statement, pc: int, blocks: _Blocks) -> int:
+    def call(self, st: Statement, pc: int, blocks: Blocks) -> int:
         label = st.params[0]
         assert isinstance(label, Label)
         start = blocks.macros.get(label.name)
@@ -319,7 +315,7 @@ class Run:
         if isinstance(value, str):
             frame.words[name] = Text(value)
 
-    def leave_macro(self, pc: int, blocks: _Blocks) -> int:
+    def leave_macro(self, pc: int, blocks: Blocks) -> int:
         if blocks.owner_macro.get(pc) is None:
             return pc + 1  # the end of a wrapper MACRO without a label
         frame = self.ev.frames.pop() if len(self.ev.frames) > 1 else None
@@ -327,7 +323,7 @@ class Run:
             raise EvalError("ENDMAC reached outside a macro call")
         return frame.back
 
-    def jump(self, st: Statement, pc: int, blocks: _Blocks) -> int:
+    def jump(self, st: Statement, pc: int, blocks: Blocks) -> int:
         name = _jump_name(st.params)
         region = blocks.region[pc]
         target = blocks.labels.get((region, name))
@@ -443,75 +439,6 @@ def _jump_name(params: tuple[Param, ...]) -> str:
     if isinstance(item, int) and not isinstance(item, bool):
         return str(item)
     raise EvalError("expected a label in parentheses, (name)")
-
-
-class _Blocks:
-    """The block structure of a program: matching openers and closers, the cases of
-    each SELECT, macros, labels and the region (main program or macro) of each
-    statement.  Raises a located DmisProgramError for a program whose blocks do not nest."""
-
-    def __init__(self, stmts: tuple[Statement, ...],
-                 fail: Callable[[Statement, str], DmisProgramError]) -> None:
-        self.end: dict[int, int] = {}
-        self.else_of: dict[int, int] = {}
-        self.owner_if: dict[int, int] = {}
-        self.owner_select: dict[int, int] = {}
-        self.owner_macro: dict[int, int | None] = {}
-        self.cases: dict[int, list[int]] = {}
-        self.macros: dict[str, int] = {}
-        self.labels: dict[tuple[int, str], int] = {}
-        self.region: list[int] = []
-        self.loops: list[tuple[int, int]] = []
-        stack: list[int] = []
-        macro = -1
-        for k, st in enumerate(stmts):
-            major = st.major
-            self.region.append(macro)
-            if major in _OPENERS:
-                if major == "MACRO" and st.label is not None:
-                    if macro >= 0 or any(stmts[i].major == "MACRO" for i in stack):
-                        raise fail(st, "a MACRO inside a macro")
-                    macro = k
-                    self.macros[st.label.name] = k
-                stack.append(k)
-                self.cases[k] = []
-            elif major in _CLOSERS or major in ("ELSE", "CASE", "DFTCAS", "ENDCAS"):
-                opener = stmts[stack[-1]].major if stack else None
-                wanted = _CLOSERS.get(major) or ("IF" if major == "ELSE" else "SELECT")
-                if opener != wanted:
-                    found = f"the {opener} of line {stmts[stack[-1]].line}" if stack \
-                        else "no open block"
-                    raise fail(st, f"{major} without its {wanted} ({found})")
-                top = stack[-1]
-                if major == "ELSE":
-                    self.else_of[top], self.owner_if[k] = k, top
-                elif major in ("CASE", "DFTCAS", "ENDCAS"):
-                    self.owner_select[k] = top
-                    if major != "ENDCAS":
-                        self.cases[top].append(k)
-                else:
-                    stack.pop()
-                    self.end[top] = k
-                    if major == "ENDDO":
-                        self.loops.append((top, k))
-                    if major == "ENDMAC":
-                        self.owner_macro[k] = top if stmts[top].label is not None else None
-                        if stmts[top].label is not None:
-                            macro = -1
-            elif major == "" and st.label is not None:
-                self.labels.setdefault((macro, st.label.name), k)
-        if stack:
-            st = stmts[stack[-1]]
-            raise fail(st, f"{st.major} is never closed ({_OPENERS[st.major]})")
-
-    def skip_if(self, pc: int) -> int:
-        """Where a false IF goes on: after its ELSE, else after its ENDIF."""
-        return self.else_of[pc] + 1 if pc in self.else_of else self.end[pc] + 1
-
-    def loop_of(self, target: int) -> int | None:
-        """The innermost DO whose body holds ``target`` (its index), or None."""
-        inner = [start for start, end in self.loops if start < target <= end]
-        return max(inner) if inner else None
 
 
 def execute(program: DmisFile, host: Host, *, answers: Mapping[str, object] | None = None,
