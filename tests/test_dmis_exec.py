@@ -10,9 +10,10 @@ virtual machine, to 1e-6 mm; the evaluation of the posted run equals the twin's 
 1e-6 mm and the CMM's to the log's rounding (4 decimals, amplified by the fit: 1e-3 mm).
 
 * ``exec_camio_loop.dmi`` (LK CAMIO: Latin-1, CRLF, lines wrapped at 80): ``DECL/GLOBAL``
-  of INTGR, LONG, REAL, DOUBLE; ``X=ASSIGN/`` with ``/``, ``+``, ``*``; ``DO`` with its
-  index; ``SIN``/``COS`` in degrees; variables and expressions inside ``FEAT``, ``MEAS``
-  (the point count), ``PTMEAS`` and ``GOTO``.
+  of INTGR, LONG, REAL, DOUBLE; ``X=ASSIGN/`` with ``/``, ``+``, ``-``, ``*``; ``DO``
+  with its index and a step (a DOUBLE into an INTGR index); ``SIN``/``COS`` in
+  degrees; variables and expressions inside ``FEAT``, ``MEAS`` (the point count),
+  ``PTMEAS`` and ``GOTO``.
 * ``exec_pcdmis_macro.dmi`` (PC-DMIS: UTF-8 with BOM, lower case, indented):
   ``DECL/COMMON`` VECTOR, ``GLOBAL``, ``LOCAL`` BOOL; ``M(x)=MACRO/'dir',via`` with a
   quoted and a bare parameter, ``CALL/M(x),...`` five times; ``VCART``, ``VUNIT``,
@@ -22,7 +23,8 @@ virtual machine, to 1e-6 mm; the evaluation of the posted run equals the twin's 
   ``TEXT/QUERY`` (default GROB, or an answer), ``SELECT``/``CASE``/``DFTCAS``/
   ``ENDCAS``/``ENDSEL`` on ``SUBSTR``, ``INDX``, ``LEN``, ``CONCAT``, ``STR``, ``NINT``,
   ``INT``, ``SQRT``, ``ABS``, ``MOD``; a loop of ``(label)`` + ``IF`` + ``JUMPTO``; an
-  array; BOOL with ``.AND.``, ``.OR.``, ``.NOT.``, ``.GE.``, ``.LT.``, ``.GT.``, ``.LE.``;
+  array; BOOL with ``.AND.``, ``.OR.``, ``.NOT.``, ``.EQ.``, ``.NE.``, ``.GE.``,
+  ``.LT.``, ``.GT.``, ``.LE.``; ``IF``/``ELSE`` choosing the approach distance;
   a feature label from a CHAR variable (``F(nom)``).
 * ``exec_werth_wrapped.dms`` (WinWerth: blanks around ``/``, a ``BEGIN/CHFILE``
   characterisation block of ``KEY = value`` data): the program wrapped whole in a
@@ -174,9 +176,9 @@ def test_post_lists_every_control_statement_reached_as_a_comment() -> None:
     """Loops are unrolled: the DO line is commented once, the ENDDO and the loop body once
     per pass; nothing of the executable half is left as a skipped statement."""
     out = posted("exec_camio_loop.dmi")
-    assert out.text.count("(L26 DO/IDX,0,NBPTS-1)") == 1
+    assert out.text.count("(L26 DO/IDX,0,360-PAS,PAS)") == 1
     assert out.text.count("(L31 ENDDO)") == 6
-    assert out.text.count("(L27 ANGLE=ASSIGN/IDX PAS)") == 6
+    assert out.text.count("(L27 ANGLE=ASSIGN/IDX)") == 6
     assert not out.posted.skipped
     assert len(re.findall(r"G31", out.text)) >= EXEC["exec_camio_loop.dmi"]
 

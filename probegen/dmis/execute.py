@@ -353,6 +353,7 @@ class Run:
             params.extend(self.param(param, marks))
         label = st.label
         if label is not None and label.kind:
+            self.ev.measured = None
             label = Label(label.kind, self.ev.label_name(label.name))
             marks += [self.ev.measured] if self.ev.measured is not None else []
         if marks and self.measured == "refuse":
