@@ -264,6 +264,24 @@ def test_branch_on_a_measured_value_runs_on_the_cmm_and_is_refused_by_post() -> 
             post_dmis(program, PROFILE, skip_unsupported=skip)
 
 
+@pytest.mark.parametrize(("statement", "major", "what"), [
+    ("DO/K,1,NINT(DIA/10)\nENDDO", "DO", "loops over"),
+    ("SELECT/NINT(DIA)\nCASE/25\nENDCAS\nENDSEL", "SELECT", "selects on"),
+    ("K=ASSIGN/DIA\nF(P)=FEAT/POINT,CART,0,0,K,0,0,1", "FEAT", "uses"),
+])
+def test_loops_selections_and_definitions_on_a_measured_value_are_refused_by_post(
+        statement: str, major: str, what: str) -> None:
+    text = MEASURED.replace("DECL/LOCAL,REAL,DIA", "DECL/LOCAL,REAL,DIA\nDECL/LOCAL,INTGR,K")
+    text = text.replace("IF/(DIA .GT. 24.9)\nGOTO/CART,0,0,60\nELSE\nGOTO/CART,0,0,80\nENDIF",
+                        statement)
+    assert statement in text
+    cmm = Recording(CmmAdapter(vm()))
+    assert run_dmis(parse_dmis(text), cmm, home=HOME).alarm is None and len(cmm.hits) == 5
+    with pytest.raises(UnsupportedError, match=rf"m.dmi:2\d: cannot post-process {major} "
+                                               rf"for a machine tool: {what} a value measured"):
+        post_dmis(parse_dmis(text, source="m.dmi"), PROFILE)
+
+
 def test_a_move_to_a_measured_value_is_refused_by_post() -> None:
     text = MEASURED.replace("IF/(DIA .GT. 24.9)", "GOTO/CART,0,0,DIA*3\nIF/(1 .EQ. 1)")
     with pytest.raises(UnsupportedError, match=r"m.dmi:24: cannot post-process GOTO .* uses "
