@@ -196,7 +196,10 @@ def test_query_answers_from_a_file_on_the_cmm_post_and_the_evaluation(
     args = ["post", str(CORPUS / "exec_modus_select.dmi"), "--machine",
             str(REPO / "samples/post/vmc-fanuc-d4.toml"), "--model", str(MODEL), "-o", str(nc)]
     assert main([*args, "--answers", str(answers)]) == 0
-    assert "8 touches" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "8 touches" in printed.out
+    assert "exec_modus_select.dmi:11: TEXT/QUERY,(variante),12,A,L,'Variante GROB oder " \
+        "FEIN?','GROB' (answered 'FEIN' (from the answers file)" in printed.err
     fmap = read_feature_map(tmp_path / "modus.features.json")
     assert fmap.answers == (("VARIANTE", "FEIN"),)
     assert parse_feature_map(dumps(fmap)) == fmap
