@@ -53,7 +53,7 @@ from probegen.post.posted import PostedProgram, PostTouch
 from probegen.sim.cmm.features import arr, vec3
 from probegen.sim.cmm.interpreter import SkippedStatement, execute_statement, record_skipped
 from probegen.sim.cmm.output import StateHost
-from probegen.sim.cmm.state import NotExecutable, VmState
+from probegen.sim.cmm.state import NotExecutable, SkipWithNote, VmState
 
 Vec3 = tuple[float, float, float]
 
@@ -71,6 +71,7 @@ ID_LENGTH = 16
 MIN_APPROACH = 0.1
 """Shortest APPRCH (mm) a touch may start from: a G31 must travel before it triggers."""
 _MOTION = frozenset({"GOTO", "PTMEAS"})
+_MEASURING = frozenset({"MEAS", "PTMEAS"})
 
 
 class _Recorder:
@@ -248,11 +249,24 @@ class _Post:
         self.body.append(ir.Comment(current))
 
     def not_executed(self, state: VmState, st: Statement, reason: str) -> None:
-        """Raise UnsupportedError, or list the statement as skipped."""
-        if not self.skip:
+        """Raise UnsupportedError, or list the statement as skipped.
+
+        A measuring move (``MEAS``, ``PTMEAS``, anything that fails inside a ``MEAS``
+        block) is refused even with ``skip``: leaving it out would change what the
+        program measures."""
+        measuring = st.major in _MEASURING or state.meas is not None
+        if not self.skip or measuring:
+            hint = " (a measuring move is never skipped, not even with " \
+                   "--skip-unsupported)" if self.skip else ""
             raise UnsupportedError(f"{self.source}:{st.line}: cannot post-process "
-                                   f"{st.major} for a machine tool: {reason}\n    {st.text}")
+                                   f"{st.major} for a machine tool: {reason}{hint}\n"
+                                   f"    {st.text}")
         record_skipped(state, st, reason, self.skipped)
+        self.comment(st.line, f"SKIPPED {st.text}: {reason}")
+
+    def skip_with_note(self, state: VmState, st: Statement, reason: str) -> None:
+        """List a statement left out by design (no flag needed) and comment it."""
+        record_skipped(state, st, reason, self.skipped, effect=False)
         self.comment(st.line, f"SKIPPED {st.text}: {reason}")
 
 
@@ -326,6 +340,8 @@ def _statement(post: _Post, state: VmState, recorder: _Recorder, st: Statement) 
         execute_statement(state, st)
         _check_sensor(post, state, radius)
         post.translate(state, recorder, st)
+    except SkipWithNote as exc:
+        post.skip_with_note(state, st, str(exc))
     except NotExecutable as exc:
         if st.major == "SNSLCT":
             state.radius = radius

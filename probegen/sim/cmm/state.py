@@ -64,6 +64,27 @@ class NotExecutable(Exception):
     """A statement (or a part of one) the virtual CMM does not execute."""
 
 
+class SkipWithNote(NotExecutable):
+    """A statement left out by design, always, with its reason and without any flag:
+    what the CMM software writes for itself (report format, temperature compensation,
+    fly mode, clearance zones, vision settings ...), nothing a touch depends on."""
+
+
+@dataclass(frozen=True, slots=True)
+class ForeignSensor:
+    """A sensor that is not a touch probe (``SNSDEF/VIDEO``, ``LASER`` ...).
+
+    Attributes:
+        line: the ``SNSDEF`` line.
+        text: the ``SNSDEF`` statement as written.
+        kind: its kind (``VIDEO``).
+    """
+
+    line: int
+    text: str
+    kind: str
+
+
 @dataclass(slots=True)
 class MeasBlock:
     """An open ``MEAS`` ... ``ENDMES`` block.
@@ -107,6 +128,8 @@ class VmState:
     tolerances: dict[str, Tolerance] = field(default_factory=dict)
     results: dict[str, ToleranceResult] = field(default_factory=dict)
     sensors: dict[str, float] = field(default_factory=dict)
+    foreign: dict[str, ForeignSensor] = field(default_factory=dict)
+    selected_foreign: ForeignSensor | None = None
     radius: float | None = None
     notes: list[tuple[int, str, str]] = field(default_factory=list)
     approach: float = DEFAULT_APPROACH

@@ -1,0 +1,188 @@
+"""Vendor prologues and habits (issue 18 item 4): tests/dmis_corpus/vendor_*.
+
+Each program there was written for these tests in the style of one vendor's DMIS (no
+file copied from anywhere) and measures the five points of ``flat.dmi``, its flat twin,
+on the sample sphere (D25 at the origin):
+
+* ``vendor_camio.dmi`` (LK CAMIO, Latin-1, CRLF): DMESWV, DECPL, VFORM, DISPLY,
+  SNSET/CLRSRF and DEPTH, FLY on a variable, MODE/MAN and MODE/PROG,MAN, RECALL/SA +
+  SNSLCT/SA, SAVE/DA, a shifted frame, RECALL/DA, PAUSE.
+* ``vendor_pcdmis.dmi`` (PC-DMIS export, UTF-8 BOM, CRLF): WKPLAN, PRCOMP, TECOMP,
+  FEDRAT, MODE, GEOALG/LSTSQR, an indexed SNSDEF/PROBE,INDEX,POL tip, TOL/DIAM.
+* ``vendor_calypso.dmi`` (Zeiss Calypso export): TECOMP, CRMODE, CRSLCT, WKPLAN, MODE,
+  SNSDEF/PROBE,INDEX,VEC, SNSLCT with a head index, CZSLCT, one SNSET with APPRCH,
+  RETRCT, SEARCH and CLRSRF.
+* ``vendor_modus.dmi`` (Renishaw MODUS, Latin-1): TECOMP/OFF, CALIB/SENS on a reference
+  sphere, SNSET and SNSLCT repeated inside the MEAS block.
+* ``vendor_werth.dms`` (WinWerth): ``BEGIN/CHFILE``, blanks around ``/`` and ``,``, a
+  VIDEO sensor, a zero-diameter PROBE, FILDEF/ALGDEF/LITDEF, FILNAM, TECOMP, W3D, the
+  program wrapped in MACRO/ENDMAC, an actual given as ``FA(x)=FEAT``, TRANS on it,
+  WKPLAN/NONE, MODE, POINTDIST, PIEZOWFP, SNSET/VA, SNSLCT and CZSLCT inside MEAS.
+
+Truth: the flat twin.  Every program gives its touches to 1e-6 mm on the virtual CMM
+and through ``post`` + the virtual machine, without ``--skip-unsupported``; every
+statement left out is in the report with its reason.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_dmis_corpus import CORPUS, HOME, PROFILE, vm
+from test_dmis_exec import on_cmm, posted
+
+from probegen.cli.app import main
+from probegen.dmis.reader import parse_dmis, read_dmis
+from probegen.errors import UnsupportedError
+from probegen.post.featuremap import read_feature_map
+from probegen.post.frontend import post_dmis
+from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
+from probegen.sim.cmm.sensors import NOTED
+from probegen.sim.vm import CmmAdapter, run_text
+
+FLAT = "flat.dmi"
+DISTANCES = {"APPRCH", "RETRCT", "SEARCH", "DEPTH"}
+
+SKIPPED = {
+    "vendor_camio.dmi": {"DMESWV", "DECPL", "VFORM", "SNSET", "FLY", "MODE", "PAUSE"},
+    "vendor_pcdmis.dmi": {"WKPLAN", "TECOMP", "MODE", "GEOALG"},
+    "vendor_calypso.dmi": {"TECOMP", "CRMODE", "CRSLCT", "WKPLAN", "MODE", "CZSLCT"},
+    "vendor_modus.dmi": {"TECOMP", "CALIB"},
+    "vendor_werth.dms": {"SNSDEF", "FILDEF", "ALGDEF", "LITDEF", "TECOMP", "W3D", "WKPLAN",
+                         "MODE", "POINTDIST", "PIEZOWFP", "SNSET", "CZSLCT"},
+}
+"""Each vendor program and the major words it leaves out with a note."""
+
+
+def sphere(result: DmisRunResult) -> np.ndarray:
+    """The measured sphere's centre and diameter (the feature names differ)."""
+    found = [f for f in result.features.values() if f.kind == "SPHERE"]
+    assert len(found) == 1
+    return np.array([*found[0].location, found[0].size])
+
+
+@pytest.mark.parametrize("name", SKIPPED)
+def test_virtual_cmm_touches_as_the_flat_twin(name: str) -> None:
+    result, hits = on_cmm(name)
+    flat, flat_hits = on_cmm(FLAT)
+    assert hits.shape == flat_hits.shape == (5, 3)
+    np.testing.assert_allclose(hits, flat_hits, atol=1e-6)
+    np.testing.assert_allclose(sphere(result), sphere(flat), atol=1e-6)
+    assert sphere(result)[3] == pytest.approx(25.0, abs=1e-6)
+    assert {s.text.split("/")[0].split("=")[-1].strip() for s in result.skipped} \
+        == SKIPPED[name]
+
+
+@pytest.mark.parametrize("name", SKIPPED)
+def test_post_touches_as_the_flat_twin(name: str) -> None:
+    out, flat = posted(name), posted(FLAT)
+    assert len(out.fmap.touches) == len(flat.fmap.touches) == 5
+    for a, b in zip(out.fmap.touches, flat.fmap.touches, strict=True):
+        assert a.index == b.index
+        np.testing.assert_allclose(a.start, b.start, atol=1e-6)
+        np.testing.assert_allclose(a.direction, b.direction, atol=1e-6)
+        assert a.reach == pytest.approx(b.reach, abs=1e-6)
+    runs = [run_text(o.text, vm(), kind="macrob", source=name) for o in (out, flat)]
+    assert all(r.alarm is None and r.touches == 5 for r in runs)
+
+
+@pytest.mark.parametrize("name", SKIPPED)
+def test_every_statement_left_out_is_reported_with_its_reason(name: str) -> None:
+    """The feature map lists each skipped statement (line, text, reason), the posted
+    program carries a SKIPPED comment for it, and nothing else is skipped."""
+    out = posted(name)
+    program = read_dmis(CORPUS / name)
+    expected = [s for s in program.statements if s.major in SKIPPED[name] and (
+        s.major in NOTED or s.major == "SNSDEF" and s.params[0] != "PROBE"
+        or s.major == "SNSET" and not set(map(str, s.params)) & DISTANCES)]
+    skipped = out.fmap.skipped
+    assert [(line, text) for line, text, _ in skipped] == [(s.line, s.text) for s in expected]
+    assert all(reason for _, _, reason in skipped)
+    for line, _, _ in skipped:
+        assert f"(L{line} SKIPPED " in out.text
+
+
+def test_post_prints_every_skipped_statement(tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "camio.nc"
+    code = main(["post", str(CORPUS / "vendor_camio.dmi"), "--dialect", "fanuc",
+                 "--machine", str(CORPUS.parent.parent / "samples/post/vmc-fanuc-d4.toml"),
+                 "--model", str(CORPUS.parent.parent / "samples/sphere25/sphere25.step"),
+                 "-o", str(target)])
+    assert code == 0
+    err = capsys.readouterr().err
+    fmap = read_feature_map(target.with_suffix(".features.json"))
+    assert len(fmap.skipped) == 8
+    for line, text, reason in fmap.skipped:
+        assert f"vendor_camio.dmi:{line}: {text} ({reason})" in err
+
+
+def test_recall_da_restores_the_saved_frame() -> None:
+    """Without the RECALL/DA the shifted frame would move every touch by (10, -5, 0)."""
+    text = (CORPUS / "vendor_camio.dmi").read_bytes().decode("latin-1")
+    shifted = text.replace("RECALL/DA(Référence_MCS)", "$$ no recall")
+    result = run_dmis(parse_dmis(shifted), CmmAdapter(vm()), home=HOME)
+    assert result.alarm is not None  # the first touch goes 10 mm beside the sphere
+    assert sphere(on_cmm("vendor_camio.dmi")[0])[:3] == pytest.approx((0, 0, 0), abs=1e-6)
+
+
+VIDEO = """DMISMN/'VIDEO'
+UNITS/MM,ANGDEC
+S(CAM)=SNSDEF/VIDEO,FIXED,CART,0,0,0,0,0,1,0
+S(P)=SNSDEF/PROBE,FIXED,CART,0,0,0,0,0,1,4
+SNSLCT/S(CAM)
+F(P1)=FEAT/POINT,CART,0,0,12.5,0,0,1
+MEAS/POINT,F(P1),1
+PTMEAS/CART,0,0,12.5,0,0,1
+ENDMES
+ENDFIL
+"""
+
+
+@pytest.mark.parametrize("skip", [False, True])
+def test_a_measurement_with_a_sensor_that_is_not_a_touch_probe_is_refused(skip: bool) -> None:
+    """Refused at its MEAS naming the SNSDEF, even with --skip-unsupported."""
+    with pytest.raises(UnsupportedError, match=r"<v>:7: cannot post-process MEAS .*VIDEO "
+                                               r"sensor, not a touch probe \(SNSDEF at line 3"):
+        post_dmis(parse_dmis(VIDEO, source="<v>"), PROFILE, skip_unsupported=skip)
+    with pytest.raises(UnsupportedError, match=r"<v>:7: the virtual CMM cannot execute MEAS"):
+        run_dmis(parse_dmis(VIDEO, source="<v>"), CmmAdapter(vm()), home=HOME)
+    fixed = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)")
+    assert len(post_dmis(parse_dmis(fixed), PROFILE).touches) == 1
+
+
+def test_a_measuring_move_is_never_skipped() -> None:
+    """A PTMEAS the post cannot turn into a touch is refused with --skip-unsupported."""
+    program = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)").replace(
+        "PTMEAS/CART,0,0,12.5,0,0,1", "PTMEAS/POL,0,0,12.5,0,0,1")
+    with pytest.raises(UnsupportedError, match=r"<v>:8: cannot post-process PTMEAS .*never "
+                                               r"skipped"):
+        post_dmis(parse_dmis(program, source="<v>"), PROFILE, skip_unsupported=True)
+
+
+def test_snset_words_other_than_the_distances_and_clearance_are_refused() -> None:
+    program = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)\nSNSET/SCALE,2")
+    with pytest.raises(UnsupportedError, match=r"<v>:6: cannot post-process SNSET .*SCALE"):
+        post_dmis(parse_dmis(program, source="<v>"), PROFILE)
+    out = post_dmis(parse_dmis(program, source="<v>"), PROFILE, skip_unsupported=True)
+    assert [s.line for s in out.skipped] == [3, 6]
+
+
+def test_geoalg_other_than_least_squares_is_refused() -> None:
+    program = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)\nGEOALG/POINT,MINMAX")
+    with pytest.raises(UnsupportedError, match=r"<v>:6: .*only least-squares"):
+        post_dmis(parse_dmis(program, source="<v>"), PROFILE)
+
+
+def test_thousands_of_output_statements() -> None:
+    """A program writing 5000 OUTPUT statements (a CAMIO report of every feature) posts
+    and runs on the virtual CMM, each one echoed."""
+    text = (CORPUS / FLAT).read_text()
+    many = text.replace("OUTPUT/FA(S1)\n", "OUTPUT/FA(S1)\n" * 5000)
+    program = parse_dmis(many, source="<many>")
+    out = post_dmis(program, PROFILE)
+    assert len(out.touches) == 5 and out.skipped == ()
+    result = run_dmis(program, CmmAdapter(vm()), home=HOME)
+    assert result.output.count("OUTPUT/FA(S1)") == 5000
