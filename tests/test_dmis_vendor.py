@@ -30,14 +30,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fuzzing import examples
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mutations import mutate
 from test_dmis_corpus import CORPUS, HOME, PROFILE, vm
-from test_dmis_exec import on_cmm, posted
+from test_dmis_exec import on_cmm, posted, run_both
 
 from probegen.cli.app import main
-from probegen.dmis.reader import parse_dmis, read_dmis
+from probegen.dmis.reader import parse_dmis, read_dmis, read_dmis_text
 from probegen.errors import UnsupportedError
+from probegen.post.evaluate import evaluate_log
 from probegen.post.featuremap import read_feature_map
 from probegen.post.frontend import post_dmis
+from probegen.results import parse_dprnt
 from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
 from probegen.sim.cmm.sensors import NOTED
 from probegen.sim.vm import CmmAdapter, run_text
@@ -86,6 +92,11 @@ def test_post_touches_as_the_flat_twin(name: str) -> None:
         assert a.reach == pytest.approx(b.reach, abs=1e-6)
     runs = [run_text(o.text, vm(), kind="macrob", source=name) for o in (out, flat)]
     assert all(r.alarm is None and r.touches == 5 for r in runs)
+    logs = [parse_dprnt(r.output, strict=True) for r in runs]
+    points = [np.array([t.xyz for t in log.latest_touches()]) for log in logs]
+    np.testing.assert_allclose(points[0], points[1], atol=1e-6)
+    evaluated = [evaluate_log(log, o.fmap) for log, o in zip(logs, (out, flat), strict=True)]
+    np.testing.assert_allclose(sphere(evaluated[0]), sphere(evaluated[1]), atol=1e-6)
 
 
 @pytest.mark.parametrize("name", SKIPPED)
@@ -186,3 +197,15 @@ def test_thousands_of_output_statements() -> None:
     assert len(out.touches) == 5 and out.skipped == ()
     result = run_dmis(program, CmmAdapter(vm()), home=HOME)
     assert result.output.count("OUTPUT/FA(S1)") == 5000
+
+
+SOURCES = [read_dmis_text(CORPUS / name) for name in SKIPPED]
+ALPHABET = "()[],=/.+-*'$ \n0123456789SNETAPRCHLZOFKMDVWIX"
+
+
+@settings(max_examples=examples(60), suppress_health_check=[HealthCheck.too_slow])
+@given(st.data())
+def test_mutated_vendor_programs_end_in_a_result_or_a_located_error(
+        data: st.DataObject) -> None:
+    source = data.draw(st.sampled_from(SOURCES))
+    run_both(data.draw(st.composite(lambda draw: mutate(draw, source, ALPHABET, most=6))()))
