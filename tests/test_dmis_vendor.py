@@ -209,3 +209,19 @@ def test_mutated_vendor_programs_end_in_a_result_or_a_located_error(
         data: st.DataObject) -> None:
     source = data.draw(st.sampled_from(SOURCES))
     run_both(data.draw(st.composite(lambda draw: mutate(draw, source, ALPHABET, most=6))()))
+
+
+def test_sim_prints_every_skipped_and_noted_statement(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``probegen sim`` on a DMIS program lists what the virtual CMM left out or noted."""
+    program = CORPUS / "vendor_calypso.dmi"
+    assert main(["sim", str(program), "--part",
+                 str(CORPUS.parent.parent / "samples/sphere25/sphere25.step"),
+                 "--machine", str(CORPUS.parent.parent / "samples/post/vmc-fanuc-d4.toml"),
+                 "-o", str(tmp_path / "out.dmo")]) == 0
+    err = capsys.readouterr().err
+    for line, major in ((4, "TECOMP"), (5, "CRMODE"), (6, "CRSLCT"), (7, "WKPLAN"),
+                        (8, "MODE"), (11, "CZSLCT")):
+        assert f"probegen: skipped {program}:{line}: {major}/" in err
+    for line in (9, 10, 13):
+        assert f"probegen: note {program}:{line}: " in err

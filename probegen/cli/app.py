@@ -106,6 +106,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
     for line in control_state(result):  # offsets and rotation the program left
         print(f"  control: {line}", file=sys.stderr)
+    for line in result.report:  # DMIS statements skipped or noted, with the reason
+        print(f"probegen: {line.replace(' ', f' {args.program}:', 1)}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
         if result.alarm.startswith("76 "):

@@ -224,6 +224,8 @@ class SimResult:
         variables: Macro B only: the control's variables at the end (offsets as
             ``#5221``-, ``#10001``-, see ``macrob.RunResult``).
         rotation: Macro B only: the G68 rotation in force at the end, or None.
+        report: DMIS only: statements skipped or executed with a note, one line each
+            (``skipped <line>: <statement> (<reason>)``, ``note <line>: ...``).
     """
 
     output: str
@@ -231,6 +233,7 @@ class SimResult:
     touches: int
     variables: dict[int, float] = field(default_factory=dict)
     rotation: tuple[float, float, float] | None = None
+    report: tuple[str, ...] = ()
 
 
 HOME: Vec3 = (0.0, 0.0, 500.0)
@@ -267,7 +270,9 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
 
         dres = run_dmis(text, CmmAdapter(vm), source=source, home=home, answers=answers)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
-        return SimResult(dres.output, alarm, len(vm.touches))
+        report = tuple([f"skipped {s.line}: {s.text} ({s.reason})" for s in dres.skipped]
+                       + [f"note {s.line}: {s.text} ({s.reason})" for s in dres.notes])
+        return SimResult(dres.output, alarm, len(vm.touches), report=report)
     from probegen.sim.macrob.base import control_settings
     from probegen.sim.macrob.machine import run_program
 
