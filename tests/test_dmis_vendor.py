@@ -164,12 +164,16 @@ def test_a_measurement_with_a_sensor_that_is_not_a_touch_probe_is_refused(skip: 
     assert len(post_dmis(parse_dmis(fixed), PROFILE).touches) == 1
 
 
-def test_a_measuring_move_is_never_skipped() -> None:
-    """A PTMEAS the post cannot turn into a touch is refused with --skip-unsupported."""
-    program = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)").replace(
-        "PTMEAS/CART,0,0,12.5,0,0,1", "PTMEAS/POL,0,0,12.5,0,0,1")
-    with pytest.raises(UnsupportedError, match=r"<v>:8: cannot post-process PTMEAS .*never "
-                                               r"skipped"):
+@pytest.mark.parametrize(("old", "new", "where"), [
+    ("PTMEAS/CART", "PTMEAS/POL", "8: cannot post-process PTMEAS"),
+    ("PTMEAS/CART", "SCNSET/DRAG,0.1\nPTMEAS/CART", "8: cannot post-process SCNSET .*inside "
+                                                   "the MEAS block of line 7"),
+])
+def test_a_measuring_move_is_never_skipped(old: str, new: str, where: str) -> None:
+    """A PTMEAS the post cannot turn into a touch, a scanning setting inside a MEAS block:
+    refused even with --skip-unsupported."""
+    program = VIDEO.replace("SNSLCT/S(CAM)", "SNSLCT/S(P)").replace(old, new)
+    with pytest.raises(UnsupportedError, match=f"<v>:{where}.*never skipped"):
         post_dmis(parse_dmis(program, source="<v>"), PROFILE, skip_unsupported=True)
 
 

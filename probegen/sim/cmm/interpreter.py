@@ -235,7 +235,10 @@ def execute_statement(state: VmState, st: Statement) -> bool:
         state.emit("ENDFIL")
         return True
     if state.meas is not None and st.major not in _IN_MEAS:
-        raise state.error(f"{st.major} inside the MEAS block of line {state.meas.line}")
+        where = f"{st.major} inside the MEAS block of line {state.meas.line}"
+        if st.major in _HANDLERS:  # FEAT, MEAS, DATSET ... never belong there
+            raise state.error(where)
+        raise NotExecutable(f"{where} (scanning and vendor settings there are not executed)")
     handler = _HANDLERS.get(st.major)
     if handler is not None:
         handler(state, st)
