@@ -420,7 +420,8 @@ def _post_parsers(sub: Any) -> None:
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
     po.add_argument("--skip-unsupported", action="store_true",
-                    help="leave out (and list) statements that cannot be translated")
+                    help="leave out (and list) statements that cannot be translated, "
+                         "never a measuring move (MEAS, PTMEAS)")
     po.add_argument("--reroute", action="store_true",
                     help="lift colliding positioning moves over the clearance plane "
                          "instead of failing")
