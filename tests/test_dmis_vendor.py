@@ -34,7 +34,7 @@ from fuzzing import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import mutate
-from test_dmis_corpus import CORPUS, HOME, PROFILE, vm
+from test_dmis_corpus import CORPUS, HOME, PROFILE, model, vm
 from test_dmis_exec import on_cmm, posted, run_both
 
 from probegen.cli.app import main
@@ -42,6 +42,7 @@ from probegen.dmis.reader import parse_dmis, read_dmis, read_dmis_text
 from probegen.errors import UnsupportedError
 from probegen.post.evaluate import evaluate_log
 from probegen.post.featuremap import read_feature_map
+from probegen.post.files import post_file
 from probegen.post.frontend import post_dmis
 from probegen.results import parse_dprnt
 from probegen.sim.cmm.interpreter import DmisRunResult, run_dmis
@@ -211,7 +212,7 @@ ALPHABET = "()[],=/.+-*'$ \n0123456789SNETAPRCHLZOFKMDVWIX"
 @given(st.data())
 def test_mutated_vendor_programs_end_in_a_result_or_a_located_error(
         data: st.DataObject) -> None:
-    source = data.draw(st.sampled_from(SOURCES))
+    source = data.draw(st.sampled_from([*SOURCES, CONSTRUCT]))
     run_both(data.draw(st.composite(lambda draw: mutate(draw, source, ALPHABET, most=6))()))
 
 
@@ -229,3 +230,74 @@ def test_sim_prints_every_skipped_and_noted_statement(
         assert f"probegen: skipped {program}:{line}: {major}/" in err
     for line in (9, 10, 13):
         assert f"probegen: note {program}:{line}: " in err
+
+
+CONSTRUCT = """DMISMN/'CAMIO CONSTRUCTIONS'
+UNITS/MM,ANGDEC
+SNSET/APPRCH,3
+SNSET/SEARCH,3
+SNSET/RETRCT,3
+GOTO/CART,0,0,30
+F(PNT001)=FEAT/POINT,CART,0,0,12.5,0,0,1
+MEAS/POINT,F(PNT001),1
+PTMEAS/CART,0,0,12.5,0,0,1
+ENDMES
+GOTO/CART,20,0,30
+GOTO/CART,20,0,0
+F(PNT002)=FEAT/POINT,CART,12.5,0,0,1,0,0
+MEAS/POINT,F(PNT002),1
+PTMEAS/CART,12.5,0,0,1,0,0
+ENDMES
+GOTO/CART,20,20,0
+F(PNT003)=FEAT/POINT,CART,0,12.5,0,0,1,0
+MEAS/POINT,F(PNT003),1
+PTMEAS/CART,0,12.5,0,0,1,0
+ENDMES
+GOTO/CART,-20,20,0
+F(PNT004)=FEAT/POINT,CART,-12.5,0,0,-1,0,0
+MEAS/POINT,F(PNT004),1
+PTMEAS/CART,-12.5,0,0,-1,0,0
+ENDMES
+GOTO/CART,0,0,60
+F(PNT001_Décalé)=FEAT/POINT,CART,0,0,0,0,0,1
+CONST/POINT,F(PNT001_Décalé),MOVEPT,FA(PNT001),0,0,-12.5
+F(PLN_Equateur)=FEAT/PLANE,CART,0,0,0,0,0,1
+CONST/PLANE,F(PLN_Equateur),BF,FA(PNT002),FA(PNT003),FA(PNT004)
+F(LINE001)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,0,1
+CONST/LINE,F(LINE001),BF,FA(PNT004),FA(PNT002)
+F(PLN_Haut)=FEAT/PLANE,CART,0,0,12.5,0,0,1
+CONST/PLANE,F(PLN_Haut),PARTO,FA(PLN_Equateur),THRU,FA(PNT001)
+F(PNT_Milieu)=FEAT/POINT,CART,0,0,0,0,0,1
+CONST/POINT,F(PNT_Milieu),BF,FA(PNT002),FA(PNT004)
+DATDEF/FA(PLN_Equateur),DAT(A)
+DATDEF/FA(LINE001),DAT(B)
+DATDEF/FA(PNT_Milieu),DAT(C)
+D(Ref)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,YORIG,DAT(C),XORIG
+OUTPUT/FA(PNT001_Décalé),FA(PLN_Equateur),FA(LINE001),FA(PLN_Haut),FA(PNT_Milieu)
+ENDFIL
+"""
+CONSTRUCTED = {"PNT001_DÉCALÉ": (0, 0, 0, 0, 0, 1), "PLN_EQUATEUR": (0, 0, 0, 0, 0, 1),
+               "LINE001": (0, 0, 0, 1, 0, 0), "PLN_HAUT": (0, 0, 12.5, 0, 0, 1),
+               "PNT_MILIEU": (0, 0, 0, 0, 0, 1)}
+
+
+def test_camio_constructions_on_the_cmm_and_through_post(tmp_path: Path) -> None:
+    """MOVEPT, BF (point, line, plane) and PARTO ... THRU, and a DATSET on them: the
+    sphere's touched points give the planted truth on the virtual CMM and through post
+    + the virtual machine + the evaluation."""
+    program = parse_dmis(CONSTRUCT, source="<c>")
+    on = run_dmis(program, CmmAdapter(vm()), home=HOME)
+    out = post_dmis(program, PROFILE)
+    assert out.skipped == () and len(out.touches) == 4
+    source = tmp_path / "construct.dmi"
+    source.write_text(CONSTRUCT, encoding="utf-8")
+    posted_file = post_file(source, PROFILE, model(), dialect="fanuc")
+    run = run_text(posted_file.text, vm(), kind="macrob", source="c.nc")
+    assert run.alarm is None and run.touches == 4
+    evaluated = evaluate_log(parse_dprnt(run.output, strict=True), posted_file.fmap)
+    for result in (on, evaluated):
+        for name, truth in CONSTRUCTED.items():
+            feature = result.features[name]
+            got = (*feature.location, *(feature.vector or ()))
+            assert got == pytest.approx(truth, abs=1e-4), name  # the log's 4 decimals
+
