@@ -393,7 +393,7 @@ OPERAND = "a number, a word, a quoted string, '(', a sign or '.NOT.'"
         ),
         (
             "GOTO\n/1,2,3\n",
-            "t.dmi:2:1: expected a word, a '$$' comment, end of line or end of file, found '/'"
+            "t.dmi:2:1: expected a word, '(', a '$$' comment, end of line or end of file, found '/'"
             "\n    /1,2,3\n    ^",
         ),
         (

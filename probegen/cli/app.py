@@ -93,7 +93,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
                           control=args.control or program_control(args.program),
                           feed_override=args.feed_override,
-                          program_dir=Path(args.library or Path(args.program).parent))
+                          program_dir=Path(args.library or Path(args.program).parent),
+                          answers=_answers(args))
     data = result.output.encode("ascii", errors="replace")
     if isinstance(link, PtyLink):
         print(f"playing {len(data)} bytes over {args.pty}", file=sys.stderr)
@@ -105,6 +106,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         print(f"wrote {args.output} ({result.touches} touches)", file=sys.stderr)
     for line in control_state(result):  # offsets and rotation the program left
         print(f"  control: {line}", file=sys.stderr)
+    for line in result.report:  # DMIS statements skipped or noted, with the reason
+        print(f"probegen: {line.replace(' ', f' {args.program}:', 1)}", file=sys.stderr)
     if result.alarm:
         print(f"probegen: the program stopped on alarm {result.alarm}", file=sys.stderr)
         if result.alarm.startswith("76 ") or "Unable to open file for subroutine" in result.alarm:
@@ -136,6 +139,13 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
     return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
 
 
+def _answers(args: argparse.Namespace) -> dict[str, str | int | float] | None:
+    """The answers to a DMIS program's TEXT/QUERY statements (``--answers FILE``)."""
+    from probegen.dmis.execute import load_answers
+
+    return load_answers(args.answers) if args.answers else None
+
+
 def _program_text(path: str) -> str:
     """The text of a program to run: a DMIS file as every command reads it (UTF-8 with or
     without BOM, else Latin-1), a Macro B program as ASCII."""
@@ -160,7 +170,7 @@ def _post(args: argparse.Namespace) -> int:
     out = post_file(args.program, machine, load_part(args.model),
                     dialect=args.dialect, offset=tuple(args.model_offset),
                     skip_unsupported=args.skip_unsupported, reroute=args.reroute,
-                    number=args.number)
+                    number=args.number, answers=_answers(args))
     target = _target(args.output, Path(args.program).stem,
                      get_dialect(args.dialect).EXTENSION, 1)
     map_path = write_post(out, target)
@@ -316,6 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("program", help="program text: .nc (Macro B), .ngc (LinuxCNC) or "
                                     ".dmi/.dms (DMIS)")
     sm.add_argument("--spec", help="take the part and the machine profile from a spec")
+    sm.add_argument("--answers", metavar="FILE", help=ANSWERS_HELP)
     sm.add_argument("--part", help="the part model (STEP)")
     sm.add_argument("--machine", help="machine profile (TOML)")
     sm.add_argument("--errors", help="machine kinematics and geometric errors (TOML)")
@@ -407,6 +418,10 @@ def _add_global_flags(parser: argparse.ArgumentParser, *, top: bool) -> None:
                 _add_global_flags(sub, top=False)
 
 
+ANSWERS_HELP = ("a DMIS program's answers to its TEXT/QUERY statements: a TOML file of "
+                "NAME = value lines (never a prompt; without one, the statement's default)")
+
+
 def _post_parsers(sub: Any) -> None:
     """The ``post`` and ``post-ingest`` commands (docs/post.md)."""
     po = sub.add_parser("post", help="post-process a DMIS program into a machine-tool "
@@ -422,11 +437,13 @@ def _post_parsers(sub: Any) -> None:
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
     po.add_argument("--skip-unsupported", action="store_true",
-                    help="leave out (and list) statements that cannot be translated")
+                    help="leave out (and list) statements that cannot be translated, "
+                         "never a measuring move (MEAS, PTMEAS)")
     po.add_argument("--reroute", action="store_true",
                     help="lift colliding positioning moves over the clearance plane "
                          "instead of failing")
     po.add_argument("--number", type=int, default=1001, help="program number (1001)")
+    po.add_argument("--answers", metavar="FILE", help=ANSWERS_HELP)
     po.add_argument("-o", "--output", default="out",
                     help="program file or folder (default out/); the feature map is "
                          "written next to it")

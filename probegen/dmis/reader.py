@@ -28,7 +28,6 @@ bad statement becomes a diagnostic and the others are kept (reading DMIS output 
 
 from __future__ import annotations
 
-import bisect
 import functools
 import math
 import re
@@ -39,6 +38,8 @@ from typing import Any, TypeAlias, cast
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
+from probegen.dmis.lines import Spliced, splice
+from probegen.dmis.lines import logical_statements as logical_statements
 from probegen.errors import Diagnostic, ProgramParseError, readable_list
 from probegen.resources import grammar_text
 
@@ -150,6 +151,8 @@ def format_param(param: Param) -> str:
 
 def format_statement(statement: Statement) -> str:
     """Return canonical DMIS text for ``statement``; it parses back to the same statement."""
+    if statement.major == "" and statement.label is not None:
+        return f"({statement.label.name})"  # a program line label
     head = f"{statement.label}={statement.major}" if statement.label else statement.major
     return f"{head}/{_join(statement.params)}" if statement.params else head
 
@@ -202,6 +205,23 @@ class _Builder(Transformer[Token, Any]):
     def statement(self, target: Any, major: Token, _slash: Any, params: Any) -> _Raw:
         label, first = target if target else (None, major)
         return _Raw(0, first.start_pos or 0, label, major.upper(), params or ())
+
+    def variable_statement(self, target: tuple[Param, Token], major: Token, _slash: Any,
+                           params: tuple[Param, ...]) -> _Raw:
+        """``X=MAJOR/p1,...`` (a variable target) is read as ``MAJOR/X=p1,...``."""
+        var, first = target
+        return _Raw(0, first.start_pos or 0, None, major.upper(),
+                    (Expr("=", (var, params[0])), *params[1:]))
+
+    def variable(self, name: Token) -> tuple[Param, Token]:
+        return name.upper(), name
+
+    def variable_index(self, name: Token, indices: tuple[Param, ...]) -> tuple[Param, Token]:
+        return Expr("[]", (name.upper(), *indices)), name
+
+    def jump_label(self, name: Token) -> _Raw:
+        """``(name)``: a program line label (the target of ``JUMPTO``), major word ``""``."""
+        return _Raw(0, name.start_pos or 0, Label("", name.upper()), "", ())
 
     def target(self, kind: Token, name: Param) -> tuple[Label, Token]:
         """Return the label and the token where the statement starts."""
@@ -409,137 +429,6 @@ def parse_dmis_recovering(
     return _build(joined, items, source), tuple(diagnostics)
 
 
-def logical_statements(text: str) -> list[tuple[int, str]]:
-    """Cut DMIS text into logical statements: ``(first physical line, text)`` pairs.
-
-    Physical lines are joined as :func:`splice` joins them (a continuation ``$`` at the
-    end of a line, in a statement, a string or a comment).  Every physical line belongs to
-    exactly one pair, so line numbers stay physical.
-    """
-    joined = splice(text)
-    parts = _LINE_END.split(text.removeprefix("\ufeff"))
-    out: list[tuple[int, str]] = []
-    start = 0
-    count = (len(parts) + 1) // 2
-    for index in range(count):
-        if index + 1 < count and index < len(joined.continues) and joined.continues[index]:
-            continue
-        out.append((start + 1, "".join(parts[2 * start : 2 * index + 1])))
-        start = index + 1
-    return out
-
-
-_LINE_END = re.compile(r"(\r\n|\r|\n)")
-
-
-# ------------------------------------------------------------------------ continuations
-
-_CODE, _STRING, _COMMENT = 0, 1, 2
-"""What a continued line continues: a statement, a quoted string or a ``$$`` comment."""
-
-_STATEMENT_START = re.compile(
-    r"[ \t]*(?:\w+[ \t]*\([^()\n]*\)[ \t]*=|[A-Za-z]\w*[ \t]*/"
-    r"|(?:ENDMES|ENDFIL|ENDGO|ENDMAC|ENDDO|ENDIF|ELSE|ENDSEL|ENDCAS|DFTCAS|ENDAT|ENDXTN"
-    r"|ENDSIMREQT|PAUSE|RMEAS)[ \t]*(?:\$\$|$))",
-    re.IGNORECASE,
-)
-"""A physical line that starts a statement: a wrapped comment never goes on onto it."""
-
-
-@dataclass(frozen=True, slots=True)
-class Spliced:
-    """DMIS text with its continued lines joined, and the way back to physical positions.
-
-    Attributes:
-        physical: the physical lines (BOM dropped, line ends removed).
-        logical: the joined text; each logical line ends with ``\\n`` (the last one not
-            when the file ends in a continuation).
-        starts: the logical offset where each physical line's kept text begins.
-        dropped: per physical line, the leading blanks dropped (a continuation line).
-        continues: per physical line, whether it continues on the next.
-    """
-
-    physical: tuple[str, ...]
-    logical: str
-    starts: tuple[int, ...]
-    dropped: tuple[int, ...]
-    continues: tuple[bool, ...]
-
-    def position(self, offset: int) -> tuple[int, int]:
-        """Return the 1-based physical (line, column) of a logical offset."""
-        index = max(bisect.bisect_right(self.starts, offset) - 1, 0)
-        return index + 1, offset - self.starts[index] + self.dropped[index] + 1
-
-    @property
-    def text(self) -> str:
-        """The physical text, lines joined with ``\\n``."""
-        return "\n".join(self.physical)
-
-
-def splice(text: str) -> Spliced:
-    """Join continued lines the way CMM software writes them.
-
-    A ``$`` that is the last character of a line (blanks after it allowed) continues the
-    line on the next one, wherever it stands: between words, inside a word, a number, a
-    quoted string or a label (LK CAMIO wraps every line at column 80).  The ``$`` and the
-    line end are removed and the next line follows directly; its leading blanks are
-    dropped unless it goes on inside a quoted string (indented continuation lines).
-    In a ``$$`` comment a last ``$`` after other text continues the comment: the next
-    line is comment text, unless it starts a statement (``WORD/...``, ``X(name)=...``
-    or a bare ``ENDMES``-like word); a banner of ``$`` alone never continues.
-    """
-    text = text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
-    lines = text.split("\n")
-    if len(lines) > 1 and lines[-1] == "":
-        lines.pop()
-    pieces: list[str] = []
-    starts: list[int] = []
-    dropped: list[int] = []
-    continues: list[bool] = []
-    offset, mode = 0, _CODE
-    for index, line in enumerate(lines):
-        blanks = len(line) - len(line.lstrip(" \t")) if index and continues[-1] else 0
-        if mode == _STRING:
-            blanks = 0
-        starts.append(offset)
-        dropped.append(blanks)
-        found = _continuation(line, mode)
-        if found is not None and found[0] == _COMMENT and (
-            index + 1 == len(lines) or _STATEMENT_START.match(lines[index + 1])
-        ):
-            found = None
-        piece = line[blanks : max(found[1], blanks)] if found else line[blanks:] + "\n"
-        mode = found[0] if found else _CODE
-        continues.append(found is not None)
-        pieces.append(piece)
-        offset += len(piece)
-    return Spliced(tuple(lines), "".join(pieces), tuple(starts), tuple(dropped),
-                   tuple(continues))
-
-
-def _continuation(line: str, mode: int) -> tuple[int, int] | None:
-    """Return (what goes on, where the ``$`` is) if ``line``, entered in ``mode``, continues."""
-    body = line.rstrip(" \t\f")
-    if not body.endswith("$"):
-        return None
-    cut = len(body) - 1
-    if mode == _COMMENT:  # a line of comment text: a "$" alone on it continues too
-        return (_COMMENT, cut) if body == "$" or _comment_continues(body) else None
-    in_string = mode == _STRING
-    for index, char in enumerate(body):
-        if char == "'":
-            in_string = not in_string  # '' inside a string toggles twice: still inside
-        elif char == "$" and not in_string and index < cut:
-            if body[index + 1] == "$":
-                return (_COMMENT, cut) if _comment_continues(body[index + 2 :]) else None
-    return (_STRING if in_string else _CODE, cut)
-
-
-def _comment_continues(comment: str) -> bool:
-    """Return True if comment text ending in ``$`` continues (``$`` after other text)."""
-    return len(comment) >= 2 and comment[-2] != "$"
-
-
 # ------------------------------------------------------------------------------ parsing
 
 
@@ -551,6 +440,8 @@ def _parse_range(joined: Spliced, start: int, stop: int, source: str) -> list[An
         items = cast(list[Any], _parser().parse(chunk))
     except UnexpectedInput as exc:
         raise _syntax_error(exc, joined, start, source) from None
+    items = [replace(item, start=chunk.rfind("(", 0, item.start))
+             if isinstance(item, _Raw) and item.major == "" else item for item in items]
     if start:
         items = [replace(item, start=item.start + start, end=item.end + start)
                  if isinstance(item, _Raw) else replace(item, start=item.start + start)
@@ -669,7 +560,7 @@ def _allowed(exc: UnexpectedCharacters) -> set[str]:
 
 def _expected_list(terminals: set[str]) -> str:
     """Return ``"a, b or c"`` for the expected terminals; operators become one entry."""
-    terminals = terminals - {"LABELREF"}  # accepted only where a word is: "a word" says it
+    terminals = terminals - {"LABELREF", "LOGICAL"}  # accepted where a word is: "a word" says it
     if "STAR" in terminals:  # after an operand: any binary operator may follow
         terminals = (terminals - _OPERATORS_AFTER_OPERAND) | {"OPERATOR"}
     return readable_list(terminals, _READABLE)

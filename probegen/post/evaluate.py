@@ -127,7 +127,8 @@ def evaluate_log(log: DprntLog, fmap: FeatureMap,
     for_stylus(calibration, fmap.ball_diameter / 2.0, "--calibration")
     replay = _Replay(fmap, points, log.source, _cut(log),
                      {(t.feature, t.index): t.line for t in latest}, calibration)
-    result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True)
+    result = run_dmis(fmap.text, replay, source=fmap.source, skip_unsupported=True,
+                      answers=dict(fmap.answers))
     if replay.used != len(fmap.touches):
         raise ResultsParseError(f"{log.source}: the DMIS program probed {replay.used} points, "
                                 f"the feature map lists {len(fmap.touches)}")

@@ -47,6 +47,7 @@ class FeatureMap:
     touches: tuple[PostTouch, ...]
     skipped: tuple[tuple[int, str, str], ...] = ()
     notes: tuple[tuple[int, str, str], ...] = ()
+    answers: tuple[tuple[str, str | int | float], ...] = ()
 
 
 def as_posted(text: str, dropped: tuple[int, ...]) -> str:
@@ -73,7 +74,8 @@ def feature_map(posted: PostedProgram, data: str | bytes, source: str,
     return FeatureMap(Path(source).name, hashlib.sha256(raw).hexdigest(),
                       as_posted(text, posted.dropped_lines), dialect,
                       setup.program_number, setup.units, setup.ball_diameter,
-                      posted.touches, _rows(posted.skipped), _rows(posted.notes))
+                      posted.touches, _rows(posted.skipped), _rows(posted.notes),
+                      posted.answers)
 
 
 def _rows(items: tuple[SkippedStatement, ...]) -> tuple[tuple[int, str, str], ...]:
@@ -85,7 +87,8 @@ def dumps(fmap: FeatureMap) -> str:
     """The JSON text of ``fmap``."""
     data = {
         "format": FORMAT, "version": VERSION,
-        "dmis": {"source": fmap.source, "sha256": fmap.sha256, "text": fmap.text},
+        "dmis": {"source": fmap.source, "sha256": fmap.sha256, "text": fmap.text}
+        | ({"answers": dict(fmap.answers)} if fmap.answers else {}),
         "program": {"dialect": fmap.dialect, "number": fmap.number, "units": fmap.units,
                     "ball_diameter": fmap.ball_diameter},
         "touches": [{"feature": t.feature, "id": t.id, "index": t.index, "line": t.line,
@@ -144,10 +147,24 @@ def parse_feature_map(text: str | bytes, *, source: str = "<string>") -> Feature
                       r.get(program, "number", int, "program"),
                       r.get(program, "units", str, "program"),
                       r.number(program, "ball_diameter", "program"), touches,
-                      *_statement_rows(r, data.get("statements", {"skipped": [], "notes": []})))
+                      *_statement_rows(r, data.get("statements", {"skipped": [], "notes": []})),
+                      answers=_answers(r, dmis.get("answers", {})))
 
 
-def _statement_rows(r: _Reader, table: Any) -> tuple[tuple[tuple[int, str, str], ...], ...]:
+def _answers(r: _Reader, table: Any) -> tuple[tuple[str, str | int | float], ...]:
+    """The answers the program's TEXT/QUERY statements were posted with (name, value)."""
+    if not isinstance(table, dict):
+        raise r.fail("dmis.answers", "a table", table)
+    for key, value in table.items():
+        if not isinstance(value, str | int | float) or isinstance(value, bool):
+            raise r.fail(f"dmis.answers.{key}", "a string or a number", value)
+    return tuple(sorted(table.items()))
+
+
+Rows = tuple[tuple[int, str, str], ...]
+
+
+def _statement_rows(r: _Reader, table: Any) -> tuple[Rows, Rows]:
     """The skipped and noted statements of a map (maps before them have none)."""
     out = []
     for key, why in (("skipped", "reason"), ("notes", "note")):
@@ -156,7 +173,7 @@ def _statement_rows(r: _Reader, table: Any) -> tuple[tuple[tuple[int, str, str],
                           r.get(row, "statement", str, f"statements.{key}[{k}]"),
                           r.get(row, why, str, f"statements.{key}[{k}]"))
                          for k, row in enumerate(rows)))
-    return tuple(out)
+    return out[0], out[1]
 
 
 class _Reader:

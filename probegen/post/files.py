@@ -50,7 +50,8 @@ def program_name(path: str | Path) -> str:
 
 def post_file(program: str | Path, machine: MachineProfile, part: Part, *,
               dialect: str, offset: Vec3 = (0.0, 0.0, 0.0), skip_unsupported: bool = False,
-              reroute: bool = False, number: int = 1001) -> PostOutput:
+              reroute: bool = False, number: int = 1001,
+              answers: dict[str, str | int | float] | None = None) -> PostOutput:
     """Post DMIS file ``program`` for ``machine`` with the loaded ``part`` (the command
     loads it: :func:`probegen.cad.load_part`) at ``offset``.
 
@@ -65,7 +66,7 @@ def post_file(program: str | Path, machine: MachineProfile, part: Part, *,
     parsed = read_dmis_all(program)
     posted = post_dmis(parsed, machine, obstacle=mesh_obstacle(part, offset),
                        skip_unsupported=skip_unsupported, reroute=reroute,
-                       number=number, name=program_name(program))
+                       number=number, name=program_name(program), answers=answers)
     data = Path(program).read_bytes()  # read_dmis read it just now
     fmap = feature_map(posted, data, str(program), dialect)
     setup = replace(posted.program.setup, identity=map_identity(fmap.text, fmap.touches))

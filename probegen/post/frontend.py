@@ -15,6 +15,10 @@ program's MCS is the machine tool's work offset):
 * every other statement (``FEAT``, ``MEAS``, ``DATSET``, ``OUTPUT``, ``DISPLY``,
   ``PRCOMP``, ``FILNAM``, ``OPEN``, ...) and every ``$$`` comment → an ``ir.Comment``
   with its line number (the evaluation runs the DMIS program again, so nothing is lost);
+* variables, expressions, ``IF``, ``DO``, ``SELECT``, ``JUMPTO``, macros, ``TEXT/QUERY``
+  (:mod:`probegen.dmis.execute`) → evaluated now: each statement reached becomes its
+  comment, loops are unrolled into straight moves; a branch or move on a value measured
+  at run time (``OBTAIN`` of an actual) → ``UnsupportedError`` naming the statement;
 * a statement the interpreter cannot execute, or a sensor whose ball differs from the
   machine's stylus → ``UnsupportedError`` naming ``source:line``; with
   ``skip_unsupported`` it is listed in :attr:`PostedProgram.skipped` and as a comment.
@@ -32,11 +36,13 @@ up within the probing distances, as for a CMM's first run.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from probegen import ir
+from probegen.dmis.execute import execute, is_control
 from probegen.dmis.reader import DmisFile, Statement
 from probegen.errors import CollisionError, UnsupportedError
 from probegen.geometry.frames import FloatArray
@@ -46,7 +52,8 @@ from probegen.planning.collision import Obstacle, SegmentClearance, check_progra
 from probegen.post.posted import PostedProgram, PostTouch
 from probegen.sim.cmm.features import arr, vec3
 from probegen.sim.cmm.interpreter import SkippedStatement, execute_statement, record_skipped
-from probegen.sim.cmm.state import NotExecutable, VmState
+from probegen.sim.cmm.output import StateHost
+from probegen.sim.cmm.state import NotExecutable, SkipWithNote, VmState
 
 Vec3 = tuple[float, float, float]
 
@@ -64,6 +71,7 @@ ID_LENGTH = 16
 MIN_APPROACH = 0.1
 """Shortest APPRCH (mm) a touch may start from: a G31 must travel before it triggers."""
 _MOTION = frozenset({"GOTO", "PTMEAS"})
+_MEASURING = frozenset({"MEAS", "PTMEAS"})
 
 
 class _Recorder:
@@ -241,17 +249,31 @@ class _Post:
         self.body.append(ir.Comment(current))
 
     def not_executed(self, state: VmState, st: Statement, reason: str) -> None:
-        """Raise UnsupportedError, or list the statement as skipped."""
-        if not self.skip:
+        """Raise UnsupportedError, or list the statement as skipped.
+
+        A measuring move (``MEAS``, ``PTMEAS``, anything that fails inside a ``MEAS``
+        block) is refused even with ``skip``: leaving it out would change what the
+        program measures."""
+        measuring = st.major in _MEASURING or state.meas is not None
+        if not self.skip or measuring:
+            hint = " (a measuring move is never skipped, not even with " \
+                   "--skip-unsupported)" if self.skip else ""
             raise UnsupportedError(f"{self.source}:{st.line}: cannot post-process "
-                                   f"{st.major} for a machine tool: {reason}\n    {st.text}")
+                                   f"{st.major} for a machine tool: {reason}{hint}\n"
+                                   f"    {st.text}")
         record_skipped(state, st, reason, self.skipped)
+        self.comment(st.line, f"SKIPPED {st.text}: {reason}")
+
+    def skip_with_note(self, state: VmState, st: Statement, reason: str) -> None:
+        """List a statement left out by design (no flag needed) and comment it."""
+        record_skipped(state, st, reason, self.skipped, effect=False)
         self.comment(st.line, f"SKIPPED {st.text}: {reason}")
 
 
 def post_dmis(program: DmisFile, machine: MachineProfile, *,
               obstacle: Obstacle | None = None, skip_unsupported: bool = False,
-              reroute: bool = False, number: int = 1001, name: str = "DMIS") -> PostedProgram:
+              reroute: bool = False, number: int = 1001, name: str = "DMIS",
+              answers: Mapping[str, str | int | float] | None = None) -> PostedProgram:
     """Translate a parsed DMIS program into a machine-tool program (module docstring).
 
     Args:
@@ -263,9 +285,12 @@ def post_dmis(program: DmisFile, machine: MachineProfile, *,
         reroute: lift colliding positioning moves over the clearance plane.
         number: the program number.
         name: the program name.
+        answers: answers to the program's ``TEXT/QUERY`` statements, by name.
 
     Raises:
-        UnsupportedError: a statement that cannot be translated (``source:line``).
+        UnsupportedError: a statement that cannot be translated (``source:line``), or
+            one whose flow or values depend on a value measured at run time (never
+            skipped: the posted program would not be the CMM's).
         DmisProgramError: the DMIS program is wrong (undefined label, no ENDFIL ...).
         CollisionError: a move would bring the stylus into the part (``source:line``).
     """
@@ -276,10 +301,15 @@ def post_dmis(program: DmisFile, machine: MachineProfile, *,
     notes = sorted(program.comments)
     ended = False
     last: Statement | None = None
-    for st in program.statements:
+    steps = execute(program, StateHost(state), answers=answers, measured="refuse",
+                    notes=state.notes)
+    for st in steps:
         while notes and notes[0][0] <= st.line:
             post.comment(*notes.pop(0))
-        _statement(post, state, recorder, st)
+        if is_control(st):  # run by execute(): values known now, loops unrolled
+            post.comment(st.line, st.text)
+        else:
+            _statement(post, state, recorder, st)
         last = st
         if st.major == "ENDFIL" and state.meas is None:
             ended = True
@@ -290,7 +320,8 @@ def post_dmis(program: DmisFile, machine: MachineProfile, *,
     return PostedProgram(ir.Program(setup, tuple(post.body)), tuple(post.touches),
                          tuple(post.skipped), tuple(post.rerouted), tuple(post.segments),
                          tuple(post.dropped),
-                         tuple(SkippedStatement(*note) for note in state.notes))
+                         tuple(SkippedStatement(*note) for note in state.notes),
+                         tuple(sorted((answers or {}).items())))
 
 
 def _statement(post: _Post, state: VmState, recorder: _Recorder, st: Statement) -> None:
@@ -309,6 +340,8 @@ def _statement(post: _Post, state: VmState, recorder: _Recorder, st: Statement) 
         execute_statement(state, st)
         _check_sensor(post, state, radius)
         post.translate(state, recorder, st)
+    except SkipWithNote as exc:
+        post.skip_with_note(state, st, str(exc))
     except NotExecutable as exc:
         if st.major == "SNSLCT":
             state.radius = radius

@@ -56,7 +56,9 @@ class PostedProgram:
         dropped_lines: lines of skipped statements the interpreter would execute (a
             sensor the machine does not have): the evaluation runs without them.
         notes: statements executed with a note (a sensor that stands for the machine's
-            stylus: ``SNSLCT/SA``, ``RECALL/SA``, a zero-diameter ``SNSDEF``).
+            stylus: ``SNSLCT/SA``, ``RECALL/SA``, a zero-diameter ``SNSDEF``) or an
+            answered ``TEXT/QUERY``.
+        answers: the answers given to ``TEXT/QUERY`` statements (name, value), sorted.
     """
 
     program: ir.Program
@@ -66,6 +68,7 @@ class PostedProgram:
     segments: tuple[SegmentClearance, ...]
     dropped_lines: tuple[int, ...]
     notes: tuple[SkippedStatement, ...] = ()
+    answers: tuple[tuple[str, str | int | float], ...] = ()
 
     @property
     def move_clearance(self) -> float:

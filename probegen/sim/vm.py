@@ -224,6 +224,8 @@ class SimResult:
         variables: Macro B only: the control's variables at the end (offsets as
             ``#5221``-, ``#10001``-, see ``macrob.RunResult``).
         rotation: Macro B only: the G68 rotation in force at the end, or None.
+        report: DMIS only: statements skipped or executed with a note, one line each
+            (``skipped <line>: <statement> (<reason>)``, ``note <line>: ...``).
     """
 
     output: str
@@ -231,6 +233,7 @@ class SimResult:
     touches: int
     variables: dict[int, float] = field(default_factory=dict)
     rotation: tuple[float, float, float] | None = None
+    report: tuple[str, ...] = ()
 
 
 HOME: Vec3 = (0.0, 0.0, 500.0)
@@ -241,7 +244,8 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
              tool: int = 20, home: Vec3 = HOME,
              work_offset: Vec3 = (0.0, 0.0, 0.0), control: str = "fanuc",
              feed_override: float = 100.0,
-             program_dir: Path | None = None) -> SimResult:
+             program_dir: Path | None = None,
+             answers: dict[str, str | int | float] | None = None) -> SimResult:
     """Run program text (``kind`` ``"macrob"``, ``"ngc"`` or ``"dmis"``) on ``vm``.
 
     Args:
@@ -262,6 +266,7 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
             program's macro library); a subprogram found neither in the text nor there
             stops the run with alarm 76 naming it.  LinuxCNC: where ``o<name> call``
             finds ``<name>.ngc``.
+        answers: a DMIS program's ``TEXT/QUERY`` answers by name (``--answers``).
     """
     if kind == "ngc" or control == "linuxcnc":
         return _run_ngc(text, vm, source=source, home=home, work_offset=work_offset,
@@ -269,9 +274,11 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     if kind == "dmis":
         from probegen.sim.cmm.interpreter import run_dmis
 
-        dres = run_dmis(text, CmmAdapter(vm), source=source, home=home)
+        dres = run_dmis(text, CmmAdapter(vm), source=source, home=home, answers=answers)
         alarm = None if dres.alarm is None else _alarm_text(dres.alarm)
-        return SimResult(dres.output, alarm, len(vm.touches))
+        report = tuple([f"skipped {s.line}: {s.text} ({s.reason})" for s in dres.skipped]
+                       + [f"note {s.line}: {s.text} ({s.reason})" for s in dres.notes])
+        return SimResult(dres.output, alarm, len(vm.touches), report=report)
     from probegen.sim.macrob.base import control_settings
     from probegen.sim.macrob.machine import run_program
 

@@ -8,14 +8,15 @@ makes a measured or constructed feature a datum.
 
 ``CONST`` executes the two intersections the NIST programs use:
 ``CONST/LINE,F(x),INTOF,FA(plane),FA(plane)`` and
-``CONST/POINT,F(x),INTOF,FA(line),FA(plane)`` (either order); any other form is not
-executed.
+``CONST/POINT,F(x),INTOF,FA(line),FA(plane)`` (either order); ``MOVEPT``, ``BF`` and
+``PARTO`` in :mod:`probegen.sim.cmm.construct`; any other form is not executed.
 """
 
 from __future__ import annotations
 
 from probegen.dmis.reader import Expr, Label, Param, Statement, format_param
 from probegen.geometry.frames import FloatArray
+from probegen.sim.cmm.construct import FORMS, construct
 from probegen.sim.cmm.features import DmisFeature, arr, intersect_line_plane, intersect_planes
 from probegen.sim.cmm.frames import (
     Frame,
@@ -213,6 +214,12 @@ def do_const(state: VmState, st: Statement) -> None:
     """``CONST/LINE|POINT,F(x),INTOF,FA(a),FA(b)``: see the module docstring."""
     params = st.params
     kind = params[0] if params else None
+    if len(params) > 3 and params[2] in FORMS:
+        nominal = state.nominal(state.label(params[1], ("F",), "CONST").name)
+        if nominal.kind != kind:
+            raise state.error(f"CONST/{kind}: F({nominal.name}) is a {nominal.kind}")
+        state.actuals[nominal.name] = construct(state, nominal, str(params[2]), params[3:])
+        return
     if len(params) != 5 or params[2] != "INTOF" or kind not in ("LINE", "POINT"):
         raise NotExecutable("CONST: only LINE and POINT as INTOF (intersection) of two "
                             "features are executed")

@@ -212,7 +212,7 @@ def fit_feature(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
     contacts = centres - radius * vectors
     kind = nominal.kind
     if kind in ("POINT", "LINE") or compensation == "vector":
-        fitted = _fit_points(nominal, contacts)
+        fitted = fit_points(nominal, contacts)
     elif kind == "PLANE":
         fitted = _fit_plane(nominal, centres, vectors, radius)
     else:
@@ -220,7 +220,7 @@ def fit_feature(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
     return replace(fitted, points=tuple(vec3(p) for p in contacts))
 
 
-def _fit_points(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
+def fit_points(nominal: DmisFeature, points: FloatArray) -> DmisFeature:
     """Fit contact points (already compensated) directly."""
     kind = nominal.kind
     if kind == "POINT":

@@ -33,7 +33,12 @@ Conventions (details in the modules named):
   the output written until then (without ``ENDFIL``) and the alarm with its line.
 * Tolerances: :mod:`probegen.sim.cmm.tolerances`; output format:
   :mod:`probegen.sim.cmm.output`.
-* Accepted and ignored: :data:`NO_OPS`.  Anything else the VM cannot execute raises
+* Variables, expressions, IF, DO, SELECT, JUMPTO, macros and TEXT/QUERY:
+  :mod:`probegen.dmis.execute` (values measured here are read by ``OBTAIN``).
+* Accepted and ignored: :data:`NO_OPS`.  Skipped with their reason, always, no flag
+  needed (nothing a touch depends on): :data:`NOTED` (TECOMP, FLY, MODE, WKPLAN, CRMODE,
+  CZSLCT, VFORM ..., :mod:`probegen.sim.cmm.sensors`), listed in
+  :attr:`DmisRunResult.skipped`.  Anything else the VM cannot execute raises
   ``UnsupportedError`` (with source and line) unless ``skip_unsupported=True``; then
   each such statement is listed in :attr:`DmisRunResult.skipped`, a MEAS block with a
   skipped statement is not fitted, and statements using labels it defined are skipped
@@ -43,11 +48,12 @@ Conventions (details in the modules named):
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from probegen.dmis.execute import execute, is_control
 from probegen.dmis.reader import DmisFile, Label, Statement, Text, parse_dmis_all
 from probegen.errors import ProbegenError, UnsupportedError
 from probegen.geometry.frames import FloatArray, unit
@@ -71,13 +77,23 @@ from probegen.sim.cmm.features import (
     vec3,
 )
 from probegen.sim.cmm.measure import do_feat, do_meas, do_tol
-from probegen.sim.cmm.output import echo, feature_text, tolerance_text
-from probegen.sim.cmm.state import Cmm, DmisProgramError, MeasBlock, NotExecutable, VmState
+from probegen.sim.cmm.output import StateHost, echo, feature_text, tolerance_text
+from probegen.sim.cmm.sensors import NOTED, SENSOR_MATCH, do_noted, do_snsdef, do_snset, do_snslct
+from probegen.sim.cmm.state import (
+    Cmm,
+    DmisProgramError,
+    MeasBlock,
+    NotExecutable,
+    SkipWithNote,
+    VmState,
+)
 from probegen.sim.cmm.tolerances import ToleranceResult, evaluate
 
 __all__ = [
     "ALARM_NO_CONTACT",
     "NO_OPS",
+    "NOTED",
+    "SENSOR_MATCH",
     "Cmm",
     "DmisFeature",
     "DmisProgramError",
@@ -96,13 +112,14 @@ ALARM_NO_CONTACT = 4101
 """Alarm number: a PTMEAS touched nothing within ``APPRCH + SEARCH`` of its start."""
 
 NO_OPS = frozenset({
-    "ACLRAT", "CLOSE", "DECL", "DEVICE", "DISPLY", "FEDRAT", "FINPOS", "MODE", "OPEN",
-    "PRCOMP", "SNSMNT", "TEXT", "WKPLAN",
+    "ACLRAT", "CLOSE", "DECL", "DEVICE", "DISPLY", "FEDRAT", "FINPOS", "OPEN",
+    "PRCOMP", "SNSMNT", "TEXT",
 })
 """Statements accepted and ignored (``TEXT/OUTFIL`` is copied to the output file)."""
 
-_IN_MEAS = frozenset({"GOTO", "PTMEAS", "ENDMES"}) | NO_OPS
-"""Statements allowed between MEAS and ENDMES."""
+_IN_MEAS = frozenset({"GOTO", "PTMEAS", "ENDMES", "SNSET", "SNSLCT"}) | NO_OPS | set(NOTED)
+"""Statements allowed between MEAS and ENDMES (vendors repeat SNSET and SNSLCT before
+each PTMEAS)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -146,13 +163,10 @@ class DmisRunResult:
     notes: tuple[SkippedStatement, ...] = ()
 
 
-SENSOR_MATCH = 1e-4
-"""Largest difference, mm, between a program's sensor ball radius and the machine's."""
-
-
 def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
              skip_unsupported: bool = False, compensation: Compensation = "feature",
-             home: Vec3 | None = None) -> DmisRunResult:
+             home: Vec3 | None = None, answers: Mapping[str, object] | None = None
+             ) -> DmisRunResult:
     """Run a DMIS program on ``cmm`` and return the output file and the actuals.
 
     Args:
@@ -162,6 +176,7 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
         skip_unsupported: list statements the VM cannot execute instead of raising.
         compensation: ``"feature"`` or ``"vector"`` stylus compensation.
         home: the ball centre's machine position at the start, if known.
+        answers: answers to ``TEXT/QUERY`` by name (:mod:`probegen.dmis.execute`).
 
     Returns:
         The run result; a machine alarm is reported in it, not raised.
@@ -177,10 +192,14 @@ def run_dmis(program: DmisFile | str, cmm: Cmm, *, source: str | None = None,
     state = VmState(cmm, source or parsed.source, compensation, start)
     skipped: list[SkippedStatement] = []
     alarm, ended = None, False
-    for statement in parsed.statements:
+    for statement in execute(parsed, StateHost(state), answers=answers, notes=state.notes):
         state.statement = statement
+        if is_control(statement):  # variables and control flow: run by execute()
+            continue
         try:
             ended = execute_statement(state, statement)
+        except SkipWithNote as exc:
+            record_skipped(state, statement, str(exc), skipped, effect=False)
         except NotExecutable as exc:
             _not_executed(state, statement, str(exc), skip_unsupported, skipped)
         except SimAlarm as exc:
@@ -216,7 +235,10 @@ def execute_statement(state: VmState, st: Statement) -> bool:
         state.emit("ENDFIL")
         return True
     if state.meas is not None and st.major not in _IN_MEAS:
-        raise state.error(f"{st.major} inside the MEAS block of line {state.meas.line}")
+        where = f"{st.major} inside the MEAS block of line {state.meas.line}"
+        if st.major in _HANDLERS:  # FEAT, MEAS, DATSET ... never belong there
+            raise state.error(where)
+        raise NotExecutable(f"{where} (scanning and vendor settings there are not executed)")
     handler = _HANDLERS.get(st.major)
     if handler is not None:
         handler(state, st)
@@ -235,11 +257,17 @@ def _not_executed(state: VmState, st: Statement, reason: str, skip: bool,
 
 
 def record_skipped(state: VmState, st: Statement, reason: str,
-                   skipped: list[SkippedStatement]) -> None:
-    """List ``st`` as skipped; labels it defines and a MEAS block it is in become unusable."""
+                   skipped: list[SkippedStatement], *, effect: bool = True) -> None:
+    """List ``st`` as skipped; unless it has no ``effect`` on the measurement
+    (:class:`SkipWithNote`), labels it defines (``CONST`` included) and a MEAS block it
+    is in become unusable."""
     skipped.append(SkippedStatement(st.line, st.text, reason))
-    if st.label is not None:
-        state.skipped_labels[f"{st.label.kind}({st.label.name})"] = st.line
+    if not effect:
+        return
+    defined = st.label if st.label is not None else (
+        st.params[1] if st.major in ("CONST", "DATDEF") and len(st.params) > 1 else None)
+    if isinstance(defined, Label):
+        state.skipped_labels[f"{defined.kind}({defined.name})"] = st.line
     if st.major == "MEAS":
         target = st.params[1] if len(st.params) > 1 else None
         name = target.name if isinstance(target, Label) else "?"
@@ -275,61 +303,6 @@ def do_text(state: VmState, st: Statement) -> None:
 
 
 # ------------------------------------------------------------------------ sensors
-
-
-def do_snsdef(state: VmState, st: Statement) -> None:
-    """``S(x)=SNSDEF/PROBE,...,diameter``: a probe whose ball diameter is the last value;
-    a diameter of 0 stands for the machine's calibrated stylus."""
-    if st.label is None or st.label.kind != "S":
-        raise state.error("SNSDEF must define a sensor: S(name)=SNSDEF/...")
-    if not st.params or st.params[0] != "PROBE":
-        raise NotExecutable("SNSDEF: only PROBE sensors are executed")
-    diameter = state.length(st.params[-1], "SNSDEF diameter")
-    if diameter < 0.0:
-        raise state.error(f"SNSDEF: the ball diameter must be >= 0, found {diameter}")
-    state.sensors[st.label.name] = diameter
-
-
-def do_snslct(state: VmState, st: Statement) -> None:
-    """``SNSLCT/S(x)``: compensate with that sensor's ball from now on, which must be the
-    machine's; ``SNSLCT/SA(x)`` and a zero-diameter sensor select the machine's stylus."""
-    if not st.params:
-        raise state.error("SNSLCT expects S(name) or SA(name)")
-    ref = st.params[0]
-    machine = float(state.cmm.ball_radius)
-    if isinstance(ref, Label) and ref.kind == "SA":
-        state.use_machine_stylus(st, f"{ref} is a calibrated sensor")
-        return
-    name = state.label(ref, ("S",), "SNSLCT").name
-    if name not in state.sensors:
-        state.check_skipped("S", name)
-        raise state.error(f"S({name}) is not defined")
-    diameter = state.sensors[name]
-    if diameter == 0.0:
-        state.use_machine_stylus(st, f"S({name}) has a zero ball diameter")
-        return
-    if abs(diameter / 2.0 - machine) > SENSOR_MATCH:
-        raise NotExecutable(f"the sensor's ball is D{diameter:g} mm, the machine's stylus "
-                            f"D{2 * machine:g} mm (give a machine profile with this stylus, "
-                            "or skip the SNSLCT to compensate with the machine's)")
-    state.radius = diameter / 2.0
-
-
-_SNSET = {"APPRCH": "approach", "RETRCT": "retract", "SEARCH": "search", "DEPTH": "depth"}
-
-
-def do_snset(state: VmState, st: Statement) -> None:
-    """``SNSET/APPRCH|RETRCT|SEARCH|DEPTH,distance`` (several pairs allowed)."""
-    params = list(st.params)
-    if not params or len(params) % 2:
-        raise state.error("SNSET expects pairs: APPRCH|RETRCT|SEARCH|DEPTH, distance")
-    for word, value in zip(params[::2], params[1::2], strict=True):
-        if word not in _SNSET:
-            raise NotExecutable(f"SNSET/{word}: only {', '.join(_SNSET)} are executed")
-        distance = state.length(value, f"SNSET {word}")
-        if distance < 0.0:
-            raise state.error(f"SNSET/{word}: expected a distance >= 0, found {distance}")
-        setattr(state, _SNSET[str(word)], distance)
 
 
 def _ball_radius(state: VmState) -> float:
@@ -501,4 +474,5 @@ _HANDLERS: dict[str, Callable[[VmState, Statement], None]] = {
     "DATDEF": do_datdef, "SAVE": do_save, "RECALL": do_recall, "CONST": do_const,
     "EVAL": do_eval, "OUTPUT": do_output,
 }
+_HANDLERS.update({major: do_noted for major in NOTED})
 """Major word -> handler; majors in :data:`NO_OPS` need none."""

@@ -23,6 +23,7 @@ from probegen.dmis.reader import Param, Statement, format_param
 from probegen.errors import ProbegenError
 from probegen.sim.cmm.features import KINDS, SIDED, DmisFeature, arr, parse_nominal, vec3
 from probegen.sim.cmm.frames import Frame
+from probegen.sim.cmm.sensors import check_touch_sensor
 from probegen.sim.cmm.state import MeasBlock, NotExecutable, VmState
 from probegen.sim.cmm.tolerances import parse_tolerance
 
@@ -30,9 +31,11 @@ _QUALIFIERS = {"LINE": ("BND", "UNBND")} | {kind: ("INNER", "OUTER") for kind in
 
 
 def do_feat(state: VmState, st: Statement) -> None:
-    """``F(x)=FEAT/<type>,...``: define a nominal feature in the active PCS."""
-    if st.label is None or st.label.kind != "F":
-        raise state.error("FEAT must define a nominal feature: F(name)=FEAT/...")
+    """``F(x)=FEAT/<type>,...``: define a nominal feature in the active PCS;
+    ``FA(x)=FEAT/...`` (WinWerth, PC-DMIS: an actual given by the program) defines the
+    actual feature, and the nominal too unless the program defined one."""
+    if st.label is None or st.label.kind not in ("F", "FA"):
+        raise state.error("FEAT must define a feature: F(name)=FEAT/... or FA(name)=FEAT/...")
     params = list(st.params)
     kind = params.pop(0) if params else None
     if kind not in KINDS:
@@ -48,7 +51,12 @@ def do_feat(state: VmState, st: Statement) -> None:
         nominal = parse_nominal(st.label.name, str(kind), qualifier, numbers, state.scale)
     except (ValueError, ProbegenError) as exc:  # a wrong count, a zero vector
         raise state.error(str(exc)) from None
-    state.nominals[nominal.name] = to_machine(nominal, state.frame)
+    placed = to_machine(nominal, state.frame)
+    if st.label.kind == "FA":
+        state.actuals[placed.name] = placed
+        state.nominals.setdefault(placed.name, placed)
+    else:
+        state.nominals[placed.name] = placed
 
 
 def _qualifier(state: VmState, kind: str, params: list[Param]) -> str | None:
@@ -93,6 +101,7 @@ def do_meas(state: VmState, st: Statement) -> None:
     """``MEAS/<type>,F(x),n``: open a block of ``n`` PTMEAS (and GOTO) statements."""
     if state.meas is not None:
         raise state.error(f"MEAS inside the MEAS block of line {state.meas.line}")
+    check_touch_sensor(state)
     if len(st.params) != 3:
         raise state.error("MEAS expects <type>,F(name),number of points")
     kind = st.params[0]
@@ -102,6 +111,8 @@ def do_meas(state: VmState, st: Statement) -> None:
     if nominal.kind != kind:
         raise state.error(f"MEAS/{kind}: F({nominal.name}) is a {nominal.kind}")
     count = st.params[2]
+    if isinstance(count, float) and count.is_integer():  # a REAL variable holding 7.0
+        count = int(count)
     if not isinstance(count, int) or count < 1:
         raise state.error(f"MEAS: expected a positive point count, found {format_param(count)}")
     state.meas = MeasBlock(nominal, nominal.name, count, st.line)

@@ -11,9 +11,12 @@
 
 from __future__ import annotations
 
-from probegen.dmis.reader import Statement, format_param
+from probegen.dmis.reader import Label, Param, Statement, format_param
+from probegen.dmis.values import EvalError
+from probegen.errors import ProbegenError
 from probegen.sim.cmm.features import SIDED, DmisFeature, Vec3, arr, vec3
 from probegen.sim.cmm.frames import Frame
+from probegen.sim.cmm.state import NotExecutable, VmState
 from probegen.sim.cmm.tolerances import ToleranceResult
 
 LINE_LIMIT = 80
@@ -109,3 +112,30 @@ def tolerance_text(result: ToleranceResult, scale: float) -> str:
     items = [tolerance.kind] + ([tolerance.mode] if tolerance.mode else [])
     items += [number(result.deviation / scale), "INTOL" if result.in_tolerance else "OUTOL"]
     return wrap(f"TA({tolerance.name}) = TOL/", [items])
+
+
+class StateHost:
+    """What ``OBTAIN`` reads on a run (:class:`probegen.dmis.execute.Host`): a parameter
+    of ``FA(x)`` or ``F(x)`` as the output file gives it (PCS, program units)."""
+
+    def __init__(self, state: VmState) -> None:
+        self.state = state
+
+    def obtain(self, label: Label, index: int) -> tuple[Param, bool]:
+        """Parameter ``index`` (1-based) of ``FA(x) = FEAT/...`` or ``F(x) = FEAT/...``
+        as output (``FEAT/CIRCLE,INNER,CART,x,...``: 1 is CIRCLE, 4 is x), unrounded;
+        measured for ``FA``."""
+        state = self.state
+        if label.kind not in ("FA", "F"):
+            raise EvalError(f"OBTAIN/{label}: only FA(x) and F(x) are read")
+        try:
+            feature = state.actual(label.name) if label.kind == "FA" else \
+                state.nominal(label.name)
+        except (ProbegenError, NotExecutable) as exc:
+            raise EvalError(str(exc)) from None
+        words: list[Param] = [feature.kind, *([feature.qualifier] if feature.qualifier
+                                                else []), "CART"]
+        params = [*words, *_values(feature, state.frame, state.scale)]  # full precision
+        if index > len(params):
+            raise EvalError(f"OBTAIN/{label},{index}: {label} has {len(params)} parameters")
+        return params[index - 1], label.kind == "FA"

@@ -19,7 +19,7 @@ import numpy as np
 
 from probegen.constants import MM_PER_INCH
 from probegen.dmis.reader import Call, Expr, Label, Param, Statement, format_param
-from probegen.errors import ProbegenError
+from probegen.dmis.values import DmisProgramError
 from probegen.geometry.frames import FloatArray
 from probegen.sim.cmm.features import Compensation, DmisFeature, Vec3
 from probegen.sim.cmm.frames import Frame
@@ -60,15 +60,29 @@ class Cmm(Protocol):
         ...
 
 
-class DmisProgramError(ProbegenError):
-    """A DMIS program that parses but is wrong: an undefined label, a word where a number
-    must be, a MEAS block with too few points.  The message names source and line."""
-
-    exit_code = 6
-
-
 class NotExecutable(Exception):
     """A statement (or a part of one) the virtual CMM does not execute."""
+
+
+class SkipWithNote(NotExecutable):
+    """A statement left out by design, always, with its reason and without any flag:
+    what the CMM software writes for itself (report format, temperature compensation,
+    fly mode, clearance zones, vision settings ...), nothing a touch depends on."""
+
+
+@dataclass(frozen=True, slots=True)
+class ForeignSensor:
+    """A sensor that is not a touch probe (``SNSDEF/VIDEO``, ``LASER`` ...).
+
+    Attributes:
+        line: the ``SNSDEF`` line.
+        text: the ``SNSDEF`` statement as written.
+        kind: its kind (``VIDEO``).
+    """
+
+    line: int
+    text: str
+    kind: str
 
 
 @dataclass(slots=True)
@@ -114,6 +128,8 @@ class VmState:
     tolerances: dict[str, Tolerance] = field(default_factory=dict)
     results: dict[str, ToleranceResult] = field(default_factory=dict)
     sensors: dict[str, float] = field(default_factory=dict)
+    foreign: dict[str, ForeignSensor] = field(default_factory=dict)
+    selected_foreign: ForeignSensor | None = None
     radius: float | None = None
     notes: list[tuple[int, str, str]] = field(default_factory=list)
     approach: float = DEFAULT_APPROACH
@@ -148,8 +164,8 @@ class VmState:
         if isinstance(param, int | float) and not isinstance(param, bool):
             return float(param)
         if isinstance(param, str | Expr | Call):
-            raise NotExecutable(f"{what} is {format_param(param)}: variables and "
-                                "expressions are not executed")
+            raise NotExecutable(f"{what} is {format_param(param)}: not a number, nor a "
+                                "declared variable or an expression of them")
         raise self.error(f"{what}: expected a number, found {format_param(param)}")
 
     def numbers(self, params: tuple[Param, ...] | list[Param], what: str) -> list[float]:
