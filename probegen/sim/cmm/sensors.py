@@ -84,9 +84,16 @@ def do_snsdef(state: VmState, st: Statement) -> None:
         raise state.error(f"SNSDEF: the ball diameter must be >= 0, found {diameter}")
     state.sensors[st.label.name] = diameter
     state.foreign.pop(st.label.name, None)
-    if "INDEX" in st.params[1:3]:
+    if "INDEX" in st.params[1:3] and not _straight_down(st.params):
         state.notes.append((st.line, st.text, "an indexed probe head: the machine tool's "
                             "stylus is fixed and touches the same ball centres"))
+
+
+def _straight_down(params: tuple[object, ...]) -> bool:
+    """Whether an indexed ``SNSDEF/PROBE,INDEX,POL,a,b,...`` stands at A0 B0 (the stylus
+    straight down, as a machine tool's spindle probe stands: nothing to note)."""
+    return (len(params) > 4 and params[2] == "POL"
+            and all(isinstance(a, (int, float)) and a == 0 for a in params[3:5]))
 
 
 def do_snslct(state: VmState, st: Statement) -> None:
