@@ -298,10 +298,16 @@ def part_text(dialect: Fanuc, program: ir.Program, start: int, end: int, k: int)
     sub = ir.Program(replace(s, program_number=s.program_number + k,
                              program_name=f"{s.program_name} PART {k}"[:40]),
                      (*pose, *body[start:end]))
-    fresh = type(dialect)()
-    fresh.compact = dialect.compact
+    fresh = _like(dialect)
     fresh.preset_numbers = dialect.feature_numbers  # the whole program's (fit generated it)
     return subprogram(fresh.generate(sub), s, k)
+
+
+def _like(dialect: Fanuc) -> Fanuc:
+    """A fresh dialect of ``dialect``'s kind writing the same form (inline or compact)."""
+    fresh = type(dialect)()
+    fresh.compact = dialect.compact
+    return fresh
 
 
 def subprogram(text: str, s: ir.Setup, k: int) -> str:
@@ -328,8 +334,7 @@ def driver(dialect: Fanuc, program: ir.Program, parts: tuple[Part, ...]) -> str:
     """The program the operator runs: the unsplit header and footer, ``M98 P`` per part
     between them; its header comment names every part's file and features."""
     s = program.setup
-    fresh = type(dialect)()
-    fresh.compact = dialect.compact  # the log header's format version is the parts'
+    fresh = _like(dialect)  # compact too: the log header's format version is the parts'
     lines = fresh.generate(ir.Program(s, ())).split("\n")
     limit = fresh.line_limit()[0]
     notes = [f"(RUNS {len(parts)} PARTS WITH M98, FILES BESIDE IT:)"]
