@@ -371,6 +371,66 @@ class Rotary:
 
 
 @dataclass(frozen=True, slots=True)
+class Orient:
+    """Turn the probe to a new orientation (issue 17): the coordinates of every node after
+    it, up to the next ``Orient``, are in its *frame*.
+
+    The frame: ``p_work = origin + R·p_frame`` with ``R = rotation`` (rows; its columns are
+    the frame's X, Y and Z axes in work coordinates).  The probe hangs along the frame's
+    -Z (frame +Z is the tool axis, from the part towards the head or spindle, as in
+    Fanuc's feature coordinate system), so a feature is planned in its frame exactly as for
+    a vertical probe.  The identity rotation is the vertical probe, the program's state at
+    its start; a program that turned ends with an ``Orient`` back to it.  Helpers:
+    :mod:`probegen.ir.frames`.
+
+    The node stands between features, never inside a ``FeatureBlock``; the move before it
+    ends at the previous frame's clearance level and the move after it starts at this
+    frame's ``clearance_z``.
+
+    Attributes:
+        name: upper-case label, ``[A-Z0-9_]``, at most 16 characters: ``A90B-90`` becomes
+            ``A90BM90`` (a CMM head's angles), ``TILT1`` (a tilted plane), the setup's name.
+        rotation: the 3×3 rotation, rows, unit columns.
+        origin: work coordinates of the frame origin, mm (the planner uses (0, 0, 0)).
+        head: a CMM's indexable-head angles ``(A, B)``, deg, or None.
+        rotary: the machine's rotary-axis angles the orientation needs, ``(("A", a),
+            ("C", c))`` (informational: a Fanuc control finds them itself with G53.1),
+            or ().
+        clearance_z: this frame's clearance level (frame Z), mm.
+    """
+
+    name: str
+    rotation: tuple[Vec3, Vec3, Vec3]
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    head: tuple[float, float] | None = None
+    rotary: tuple[tuple[str, float], ...] = ()
+    clearance_z: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class SelectStylus:
+    """Take another stylus of the rack (issue 17) before the next feature.
+
+    A machine tool changes the probe tool (``T.. M6``, its length offset ``H``); a CMM
+    selects the sensor (DMIS ``SNSLCT`` of the stylus label at the current orientation).
+    Like ``Orient``, it stands between features, the probe at the clearance level.
+
+    Attributes:
+        label: the stylus's rack label, upper-case ``[A-Z0-9_]`` (DMIS sensor label).
+        tool_number: its tool and length-offset number on a machine tool.
+        ball_diameter: mm.
+        shank_diameter: mm.
+        length: ball centre to the probe body, mm.
+    """
+
+    label: str
+    tool_number: int
+    ball_diameter: float
+    shank_diameter: float
+    length: float
+
+
+@dataclass(frozen=True, slots=True)
 class WorkOffsetShift:
     """Add ``shift`` (mm, X Y Z) to the work offset ``work_offset`` (``G54`` .. ``G59``):
     a compensation the program applies, e.g. method M4's ``-δ`` along X."""
@@ -380,7 +440,7 @@ class WorkOffsetShift:
 
 
 Node = (Comment | Move | Touch | Dwell | Assign | ReportCentre | FeatureBlock | LocalFrame
-        | RestoreFrame | Rotary | WorkOffsetShift | ActionNode)
+        | RestoreFrame | Rotary | WorkOffsetShift | Orient | SelectStylus | ActionNode)
 
 
 @dataclass(frozen=True, slots=True)

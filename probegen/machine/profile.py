@@ -182,6 +182,92 @@ class StatedUncertainty:
 
 
 @dataclass(frozen=True, slots=True)
+class Stylus:
+    """One stylus of the rack (issue 17): ``[[probe.stylus]]`` in the profile.
+
+    Attributes:
+        label: upper-case ``[A-Z0-9_]`` name, the DMIS sensor label (``S(label)``).
+        ball_diameter: mm.
+        shank_diameter: mm.
+        length: ball centre to the probe body, mm.
+        tool_number: tool and length-offset number on a machine tool.
+        offset: a star stylus's tip offset from the probe axis, mm (frame of the vertical
+            probe), (0, 0, 0) for a straight stylus.
+    """
+
+    label: str
+    ball_diameter: float
+    shank_diameter: float
+    length: float
+    tool_number: int
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def ball_radius(self) -> float:
+        """Half the ball diameter, mm."""
+        return self.ball_diameter / 2.0
+
+
+@dataclass(frozen=True, slots=True)
+class Head:
+    """A CMM's indexable probe head (``[head]``, like a Renishaw PH10): ``A`` tilts the
+    stylus from straight down (0) towards the horizontal (90) and beyond, ``B`` turns it
+    about the vertical; both in ``step`` increments.
+
+    Attributes:
+        a: the A range, deg.
+        b: the B range, deg.
+        step: the index step, deg.
+        body_diameter: the probe body and head's diameter for the collision check, mm.
+        body_length: from the stylus's end to the head's turning centre, mm.
+    """
+
+    a: tuple[float, float] = (0.0, 105.0)
+    b: tuple[float, float] = (-180.0, 180.0)
+    step: float = 7.5
+    body_diameter: float = 25.0
+    body_length: float = 60.0
+
+
+@dataclass(frozen=True, slots=True)
+class Tilt:
+    """A five-axis machine's 3+2 positioning with a tilted work plane (``[tilt]``).
+
+    Attributes:
+        command: ``G68.2`` (Fanuc, with ``G53.1``), ``G268`` (Haas NGC, with ``G253``).
+        tilt_axis: the axis that tilts (``A`` or ``B``).
+        rotary_axis: the rotary table's axis (``C``).
+        tilt_range: the tilt axis's travel, deg.
+        rotary_range: the rotary axis's travel, deg (a continuous table: -360, 360).
+    """
+
+    command: str = "G68.2"
+    tilt_axis: str = "A"
+    rotary_axis: str = "C"
+    tilt_range: tuple[float, float] = (-110.0, 110.0)
+    rotary_range: tuple[float, float] = (-360.0, 360.0)
+
+
+@dataclass(frozen=True, slots=True)
+class NamedSetup:
+    """A named setup (``[[setup]]``): the part turned on the table, one program each.
+
+    Attributes:
+        name: upper-case ``[A-Z0-9_]`` name.
+        rotation: the part's turn, rows (part coordinates → table frame: ``p_table =
+            R·p_part + origin``).
+        origin: mm.
+        note: the fixture note printed in the program header.
+    """
+
+    name: str
+    rotation: tuple[tuple[float, float, float], tuple[float, float, float],
+                    tuple[float, float, float]]
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    note: str = ""
+
+
+@dataclass(frozen=True, slots=True)
 class MachineProfile:
     """A machine as probegen needs to know it."""
 
@@ -199,6 +285,15 @@ class MachineProfile:
     calibration: ProbeCalibration | None = None
     """The probe calibration the in-process actions are compiled with (the spec's
     ``[machine] calibration`` or ``compile --calibration``), or None: nominal radius."""
+    rack: tuple[Stylus, ...] = ()
+    """The styli a program may take (issue 17), ``[[probe.stylus]]``; empty: only the
+    ``[probe]`` stylus."""
+    head: Head | None = None
+    """A CMM's indexable head, or None."""
+    tilt: Tilt | None = None
+    """A five-axis machine's tilted work plane, or None."""
+    setups: tuple[NamedSetup, ...] = ()
+    """Named setups (the part turned), or none."""
 
     def check_program_number(self, number: int, where: str) -> None:
         """Refuse a program number outside ``controller.program_numbers``.
