@@ -8,7 +8,7 @@ per minute.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -294,6 +294,33 @@ class MachineProfile:
     """A five-axis machine's tilted work plane, or None."""
     setups: tuple[NamedSetup, ...] = ()
     """Named setups (the part turned), or none."""
+
+    @property
+    def stylus(self) -> Stylus:
+        """The stylus of ``[probe]`` (the one in the spindle or head when a program
+        starts): the rack's entry with its tool number and ball, else one labelled
+        ``PRB<tool number>``."""
+        p = self.probe
+        for s in self.rack:
+            if (s.tool_number, s.ball_diameter, s.shank_diameter, s.length) == (
+                    p.tool_number, p.ball_diameter, p.shank_diameter, p.length):
+                return s
+        return Stylus(f"PRB{p.tool_number}", p.ball_diameter, p.shank_diameter, p.length,
+                      p.tool_number)
+
+    def styli(self) -> tuple[Stylus, ...]:
+        """Every stylus a program may take: the ``[probe]`` stylus first, then the rack's
+        others in profile order."""
+        first = self.stylus
+        return (first, *(s for s in self.rack if s != first))
+
+    def with_stylus(self, s: Stylus) -> MachineProfile:
+        """This profile with ``s`` as its probe's stylus (approach, overtravel, feeds
+        and everything else kept): how a feature is planned with another stylus."""
+        probe = replace(self.probe, ball_diameter=s.ball_diameter,
+                        shank_diameter=s.shank_diameter, length=s.length,
+                        tool_number=s.tool_number)
+        return replace(self, probe=probe)
 
     def check_program_number(self, number: int, where: str) -> None:
         """Refuse a program number outside ``controller.program_numbers``.
