@@ -146,8 +146,8 @@ def read_rack(probe: Table, k: float, dialect: str, first: tuple[int, float, flo
     tables = probe.tables("stylus")
     rack = tuple(_stylus(t, k, dialect) for t in tables)
     start = probe_stylus(rack, *first)
-    labels = {start.label: "probe (the [probe] stylus)"}
-    tools = {start.tool_number: f"probe (the [probe] stylus {start.label})"}
+    labels = {start.label: "probe"}
+    tools = {start.tool_number: f"the [probe] stylus {start.label}"}
     for t, s in zip(tables, rack, strict=True):
         if s == start:
             continue
@@ -156,8 +156,8 @@ def read_rack(probe: Table, k: float, dialect: str, first: tuple[int, float, flo
                                   f"{', '.join(labels)})")
         labels[s.label] = t.path
         if s.tool_number and s.tool_number in tools:
-            hint = (" (an entry of the [probe] stylus's number must have its ball, shank "
-                    "and length)" if s.tool_number == first[0] else "")
+            hint = ("; an entry with the [probe] stylus's tool number must have its ball, "
+                    "shank and length" if s.tool_number == first[0] else "")
             raise t.fail("tool_number", f"a tool number no other stylus has, not "
                                         f"{s.tool_number} of {tools[s.tool_number]}{hint}")
         if s.tool_number:
@@ -330,11 +330,11 @@ def _rows(value: object) -> frames.Rotation | None:
 
 def rotation_problem(r: frames.Rotation) -> str:
     """What keeps ``r`` from being a proper rotation (``""`` when nothing does): the
-    largest error of ``R·Rᵀ = I`` or a determinant other than +1 (-1: a mirror image)."""
+    largest error of ``R Rᵀ = I`` (the rows' dot products) or a determinant other than +1 (-1: a mirror image)."""
     worst = max(abs(sum(r[i][m] * r[j][m] for m in range(3)) - (1.0 if i == j else 0.0))
                 for i in range(3) for j in range(3))
     if worst > ROTATION_TOLERANCE:
-        return f"R·Rᵀ is off the identity by {worst:.3g}"
+        return f"the rows' dot products are off by up to {worst:.3g}"
     det = (r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
            - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
            + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]))
