@@ -305,7 +305,8 @@ def _rotation(t: Table) -> frames.Rotation:
                         f"euler_zxz, found {', '.join(given) or 'none'}")
     if given[0] == "euler_zxz":
         i, j, kk = t.get_vec("euler_zxz") or (0.0, 0.0, 0.0)
-        return frames.from_euler_zxz(i, j, kk)
+        turn = frames.from_euler_zxz(i, j, kk)
+        return tuple(tuple(_snap(v) for v in row) for row in turn)  # type: ignore[return-value]
     value = t.get_any("rotation")
     rows = _rows(value)
     if rows is None:
@@ -315,6 +316,15 @@ def _rotation(t: Table) -> frames.Rotation:
         raise t.fail("rotation", f"a proper rotation (rows orthonormal and determinant "
                                  f"+1, within {ROTATION_TOLERANCE:g}; {problem})")
     return rows
+
+
+def _snap(x: float) -> float:
+    """``x`` with values within 1e-15 of 0 or ±1 snapped (no ``6e-17`` from a right
+    angle's cosine, no ``-0``)."""
+    for v in (0.0, 1.0, -1.0):
+        if abs(x - v) < 1e-15:
+            return v + 0.0
+    return x
 
 
 def _rows(value: object) -> frames.Rotation | None:
