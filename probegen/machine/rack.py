@@ -340,7 +340,8 @@ def _rows(value: object) -> frames.Rotation | None:
 
 def rotation_problem(r: frames.Rotation) -> str:
     """What keeps ``r`` from being a proper rotation (``""`` when nothing does): the
-    largest error of ``R Rᵀ = I`` (the rows' dot products) or a determinant other than +1 (-1: a mirror image)."""
+    largest error of ``R Rᵀ = I`` (the rows' dot products) or a determinant other than
+    +1 (-1: a mirror image)."""
     worst = max(abs(sum(r[i][m] * r[j][m] for m in range(3)) - (1.0 if i == j else 0.0))
                 for i in range(3) for j in range(3))
     if worst > ROTATION_TOLERANCE:
