@@ -301,3 +301,33 @@ def _toml(value: object) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml(v) for v in value) + "]"
     return str(value)
+
+
+@pytest.mark.parametrize(("profile", "dialect", "message"), [
+    (CMM, "fanuc", r"found 'fanuc': its \[head\] is a CMM's \(dialect dmis\)"),
+    (FIVE, "haas", r"found 'haas': its \[tilt\] command G68\.2 is not a haas command"),
+    (FIVE, "dmis", r"its \[tilt\] command G68\.2 is not a dmis command"),
+])
+def test_a_spec_dialect_the_profile_cannot_drive(tmp_path: Path, profile: Path, dialect: str,
+                                                 message: str) -> None:
+    path = spec_with(tmp_path, "D2", profile)
+    path.write_text(path.read_text().replace(f'profile = "{profile.as_posix()}"',
+                                             f'profile = "{profile.as_posix()}"\n'
+                                             f'dialect = "{dialect}"', 1))
+    with pytest.raises(SpecError, match=r"machine\.dialect: expected a dialect the machine "
+                                        r"profile .*" + message):
+        load_spec(path)
+
+
+def test_a_cmm_rack_without_tool_numbers_is_no_machine_tools(tmp_path: Path) -> None:
+    text = CMM.read_text(encoding="utf-8")
+    path = tmp_path / "headless.toml"
+    path.write_text(text[:text.index("[head]")] + text[text.index("[feeds]"):],
+                    encoding="utf-8")
+    spec = spec_with(tmp_path, "D2", path)
+    spec.write_text(spec.read_text().replace(f'profile = "{path.as_posix()}"',
+                                             f'profile = "{path.as_posix()}"\n'
+                                             'dialect = "linuxcnc"'))
+    with pytest.raises(SpecError, match=r"found 'linuxcnc': its \[\[probe.stylus\]\] entries "
+                                        r"have no tool_number"):
+        load_spec(spec)

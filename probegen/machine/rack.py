@@ -169,6 +169,20 @@ def read_rack(probe: Table, k: float, dialect: str, first: tuple[int, float, flo
     return rack
 
 
+def dialect_problem(rack: tuple[Stylus, ...], head: Head | None, tilt: Tilt | None,
+                    dialect: str) -> str:
+    """Why a profile with this rack, head and tilt cannot drive ``dialect`` (a spec's
+    ``[machine] dialect`` other than the profile's), or ``""``."""
+    if head is not None and dialect != "dmis":
+        return "its [head] is a CMM's (dialect dmis)"
+    if tilt is not None and TILT_COMMANDS.get(dialect) != tilt.command:
+        return f"its [tilt] command {tilt.command} is not a {dialect} command"
+    if dialect in MACHINE_TOOLS and any(s.tool_number == 0 for s in rack):
+        return ("its [[probe.stylus]] entries have no tool_number (a machine tool takes a "
+                "stylus with T.. M6)")
+    return ""
+
+
 def _stylus(t: Table, k: float, dialect: str) -> Stylus:
     label = t.get_str("label", required=True) or ""
     if not LABEL.match(label):

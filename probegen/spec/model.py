@@ -78,6 +78,7 @@ from probegen.errors import ProbegenError, SpecError, did_you_mean
 from probegen.files import Table, load_toml
 from probegen.geometry.uncertainty import DECISION_RULES
 from probegen.machine.profile import MachineProfile, load_profile
+from probegen.machine.rack import dialect_problem
 from probegen.spec.actions import (
     FORM_METHODS,
     PLANAR_KINDS,
@@ -326,7 +327,7 @@ def load_spec(path: str | Path) -> Spec:
         source=file,
         model=base / model_name if model_name else None,
         machine=machine,
-        dialect=m.get_str("dialect", machine.dialect) or machine.dialect,
+        dialect=_dialect(m, machine),
         clearance_z=_clearance(m, machine, k),
         program_number=prog.get_int("number", 1001, minimum=1, maximum=9999) or 1001,
         program_name=_program_name(prog),
@@ -380,6 +381,17 @@ def _machine(t: Table, base: Path) -> MachineProfile:
     chosen = stylus_calibration(calibration, profile.stylus.label, profile.probe.ball_radius,
                                 "", t.where("calibration"))
     return dataclasses.replace(profile, calibration=chosen)
+
+
+def _dialect(t: Table, machine: MachineProfile) -> str:
+    """``[machine] dialect``: the profile's, or another its rack, head and tilt allow."""
+    dialect = t.get_str("dialect", machine.dialect) or machine.dialect
+    problem = dialect_problem(machine.rack, machine.head, machine.tilt, dialect)
+    if problem:
+        raise SpecError(f"{t.where('dialect')}: expected a dialect the machine profile "
+                        f"({machine.source}, dialect {machine.dialect}) can drive, found "
+                        f"{dialect!r}: {problem}")
+    return dialect
 
 
 def _clearance(t: Table, machine: MachineProfile, k: float) -> float:
