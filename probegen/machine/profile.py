@@ -2,7 +2,9 @@
 
 A profile is a TOML file (``samples/machines/vmc-fanuc.toml`` is the reference).  All
 lengths in the profile's ``units`` (mm or inch) are converted to mm on load; feeds are
-per minute.
+per minute.  The stylus rack, a CMM's indexable head, a five-axis machine's tilted plane
+and named setups (``[[probe.stylus]]``, ``[head]``, ``[tilt]``, ``[[setup]]``) are read
+and checked by :mod:`probegen.machine.rack`, whose records this module re-exports.
 """
 
 from __future__ import annotations
