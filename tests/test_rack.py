@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from probegen.constants import MM_PER_INCH
-from probegen.errors import SpecError
+from probegen.errors import ExitCode, SpecError
 from probegen.ir import frames
 from probegen.machine.profile import Head, NamedSetup, Stylus, Tilt, load_profile
 from probegen.machine.rack import rotation_problem
@@ -331,3 +331,52 @@ def test_a_cmm_rack_without_tool_numbers_is_no_machine_tools(tmp_path: Path) -> 
     with pytest.raises(SpecError, match=r"found 'linuxcnc': its \[\[probe.stylus\]\] entries "
                                         r"have no tool_number"):
         load_spec(spec)
+
+
+def sample_spec(tmp: Path, profile: Path) -> Path:
+    """The bore_block sample spec on ``profile``."""
+    source = REPO / "samples" / "bore_block" / "bore_block.toml"
+    spec = tmp / "spec.toml"
+    spec.write_text(source.read_text(encoding="utf-8").replace(
+        '"bore_block.step"', f'"{(source.parent / "bore_block.step").as_posix()}"').replace(
+        '"../machines/vmc-fanuc.toml"', f'"{profile.as_posix()}"'), encoding="utf-8")
+    return spec
+
+
+def test_the_five_axis_sample_measures_the_bore_block(tmp_path: Path) -> None:
+    """Today's bore_block spec on the five-axis sample (its [probe] stylus D6): compiled,
+    run on the virtual machine with the part in place, ingested: every diameter within
+    1 um of nominal (the bore's tolerance, [0, +0.025], starts at nominal: a tenth of a
+    micrometre under it is NOT OK, the ingest's exit code 8)."""
+    import json
+
+    from probegen.cli.app import main
+
+    spec = sample_spec(tmp_path, FIVE)
+    program, log = tmp_path / "prog.nc", tmp_path / "run.log"
+    assert main(["-q", "compile", str(spec), "-o", str(program)]) == ExitCode.OK
+    assert main(["-q", "sim", str(program), "--spec", str(spec), "-o", str(log)]) == 0
+    assert main(["-q", "ingest", str(log), "--spec", str(spec), "-o", str(tmp_path)]) in (
+        ExitCode.OK, ExitCode.NOT_OK)
+    results = json.loads((tmp_path / "results.json").read_text(encoding="utf-8"))
+    features = results["features"]
+    assert [f["id"] for f in features] == ["BORE", "BOSS"]
+    diameters = [c for f in features for c in f["characteristics"]
+                 if c["name"].startswith("D")]
+    assert len(diameters) == 4 and all(abs(c["deviation"]) < 0.001 for c in diameters)
+
+
+def test_the_cmm_sample_runs_the_bore_block_on_the_virtual_cmm(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The same spec on the CMM sample (its [probe] stylus D3) to DMIS: the virtual CMM
+    runs it without an alarm, every planned touch made, an output the strict reader
+    takes."""
+    from probegen.cli.app import main
+    from probegen.results import parse_dmis_output
+
+    spec = sample_spec(tmp_path, CMM)
+    program, output = tmp_path / "prog.dmi", tmp_path / "out.dms"
+    assert main(["-q", "compile", str(spec), "-o", str(program)]) == ExitCode.OK
+    assert main(["-q", "sim", str(program), "--spec", str(spec), "-o", str(output)]) == 0
+    assert "(22 touches)" in capsys.readouterr().err
+    assert parse_dmis_output(output.read_text(encoding="latin-1"), strict=True) is not None
