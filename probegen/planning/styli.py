@@ -99,8 +99,7 @@ def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
     cut = common.rfind(": ") + 2 if ": " in common else 0
     said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
                      for (s, _), text in zip(failures, texts, strict=True))
-    error = type(last)(f"{last} (no stylus of the rack plans it, largest first: {said})")
-    return error
+    return type(last)(f"{last} (no stylus of the rack plans it, largest first: {said})")
 
 
 def _short(text: str) -> str:
