@@ -30,6 +30,8 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
   commanded point too (the reader adds the shift back).
 * ``ir.WorkOffsetShift``: ``G91 G10 L2 Pn X.. Y.. Z..`` (in G91 the values add to the
   offset), then ``G90``.
+* ``ir.Orient`` and ``ir.SelectStylus`` (issue 17): ``G53 Z0``, ``G68.2``/``G53.1``/``G69``
+  and tool changes, :mod:`probegen.dialects.fanuc_orient`.
 """
 
 from __future__ import annotations
