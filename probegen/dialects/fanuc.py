@@ -77,22 +77,9 @@ class Fanuc(MacroB):
     operator can still stop the machine)."""
     MACRO_LIBRARY: ClassVar[bool] = True
     COMPACT_DEFAULT: ClassVar[bool] = True
-    TILT_REFUSAL: ClassVar[str] = ""
-    """Why the dialect writes no tilted frame ("" : it writes G68.2/G53.1,
-    :mod:`probegen.dialects.fanuc_orient`)."""
 
     def __init__(self) -> None:
         super().__init__()
-        self.frame: ir.Orient | None = None
-        """The tilted frame in force where the program being written stands."""
-        self.axes: tuple[str, ...] = ()
-        """The rotary axes the orientations name (returned to 0 at the vertical)."""
-        self.tool = 0
-        """The tool (and length offset) number of the stylus in the spindle."""
-        self.ball = 0.0
-        """Its ball diameter, mm."""
-        self.restate: ir.Orient | None = None
-        """The frame a split part starts in (``split`` sets it): set again, no move."""
         self.feature_numbers: dict[str, int] = {}
         """The numbers the last compact program bound its features to (``FEAT`` records),
         in the order of their first calls."""

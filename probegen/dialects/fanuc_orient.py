@@ -36,17 +36,20 @@ What the Fanuc dialect writes (``docs/dialects.md``, "Orientations and stylus ch
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from probegen import ir
+from probegen.dialects.macro_b import MacroB
 from probegen.errors import UnsupportedError
 from probegen.ir import frames
 
-if TYPE_CHECKING:
-    from probegen.dialects.fanuc import Fanuc
-
 RETRACT = "G53 Z0"
 """Machine Z zero: the probe out of the way before the rotary axes or the tool move."""
+
+
+def setup(d: MacroB) -> ir.Setup:
+    """The setup of the program ``d`` is writing."""
+    if d.limits is None:
+        raise RuntimeError("no program is being written")
+    return d.limits
 
 
 def tilted(node: ir.Orient) -> bool:
@@ -54,13 +57,13 @@ def tilted(node: ir.Orient) -> bool:
     return not frames.is_identity(node.rotation) or any(abs(c) > 0.0 for c in node.origin)
 
 
-def describe(d: Fanuc, node: ir.Orient) -> str:
+def describe(d: MacroB, node: ir.Orient) -> str:
     """The comment naming an orientation and the rotary angles it needs (informational)."""
     angles = " ".join(f"{axis}{d.num(value, 3)}" for axis, value in node.rotary)
     return f"ORIENT {node.name}" + (f" {angles}" if angles else "")
 
 
-def require_tilt(d: Fanuc, node: ir.Orient) -> None:
+def require_tilt(d: MacroB, node: ir.Orient) -> None:
     """Refuse a tilted frame the control cannot set: a dialect without a tilted-plane code
     (``TILT_REFUSAL``), or a setup that states its options without ``G68.2``.
 
@@ -70,7 +73,7 @@ def require_tilt(d: Fanuc, node: ir.Orient) -> None:
     if d.TILT_REFUSAL:
         raise UnsupportedError(f"dialect {d.NAME!r} cannot turn the probe to orientation "
                                f"{node.name}: {d.TILT_REFUSAL}")
-    s = d.setup
+    s = setup(d)
     if s.options is not None and "G68.2" not in s.options:
         source = s.limits_source or "the machine profile"
         raise UnsupportedError(
@@ -80,24 +83,24 @@ def require_tilt(d: Fanuc, node: ir.Orient) -> None:
             "measure this feature in a setup of its own")
 
 
-def set_frame(d: Fanuc, node: ir.Orient) -> list[str]:
+def set_frame(d: MacroB, node: ir.Orient) -> list[str]:
     """``G68.2`` with the frame's origin and Euler angles, and ``G53.1``."""
     x, y, z = (d.length(c) for c in node.origin)
     i, j, k = (d.num(a, 4) for a in frames.euler_zxz(node.rotation))
     return [f"G68.2 X{x} Y{y} Z{z} I{i} J{j} K{k}", "G53.1"]
 
 
-def length_offset(d: Fanuc, z: float) -> str:
+def length_offset(d: MacroB, z: float) -> str:
     """``G0 G43 H<tool> Z<z>``: the current stylus's length offset, down to ``z``."""
     return f"G0 G43 H{d.tool} Z{d.length(z)}"
 
 
-def clearance(d: Fanuc) -> float:
+def clearance(d: MacroB) -> float:
     """The clearance level in force: the frame's, else the program's clearance plane."""
-    return d.frame.clearance_z if d.frame is not None else d.setup.clearance_z
+    return d.frame.clearance_z if d.frame is not None else setup(d).clearance_z
 
 
-def orient_lines(d: Fanuc, node: ir.Orient) -> list[str]:
+def orient_lines(d: MacroB, node: ir.Orient) -> list[str]:
     """The blocks of an ``Orient`` (module docstring); updates the frame in force."""
     lines = [f"({describe(d, node)})"]
     if tilted(node):
@@ -118,20 +121,20 @@ def orient_lines(d: Fanuc, node: ir.Orient) -> list[str]:
             length_offset(d, clearance(d))]
 
 
-def stylus_lines(d: Fanuc, node: ir.SelectStylus) -> list[str]:
+def stylus_lines(d: MacroB, node: ir.SelectStylus) -> list[str]:
     """The blocks of a ``SelectStylus`` (module docstring); later touches use its ball."""
     lines = [f"(STYLUS {node.label} T{node.tool_number} BALL D{d.length(node.ball_diameter)})",
-             *d.setup.probe_off, RETRACT]
+             *setup(d).probe_off, RETRACT]
     if d.frame is not None:
         lines.append("G69")
     lines.append(f"T{node.tool_number} M6")
     d.tool, d.ball = node.tool_number, node.ball_diameter
     if d.frame is not None:
         lines += set_frame(d, d.frame)
-    return [*lines, length_offset(d, clearance(d)), *d.setup.probe_on]
+    return [*lines, length_offset(d, clearance(d)), *setup(d).probe_on]
 
 
-def restate_lines(d: Fanuc, node: ir.Orient) -> list[str]:
+def restate_lines(d: MacroB, node: ir.Orient) -> list[str]:
     """A split part's first blocks inside frame ``node``: the frame set again without a
     move (the header's reset cancelled it; the rotary axes stand where they were)."""
     require_tilt(d, node)
