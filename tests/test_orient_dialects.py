@@ -250,3 +250,10 @@ def test_rs274_runs_the_stylus_change(tmp_path: Path) -> None:
     # SMALL's first touch ends 1 mm past its contact with the D2 ball: x = -18 - 0
     assert [float(v) for v in probes[6]] == [-18.0, 0.0, 45.0]
     assert 'LOG("PGEND O7")' in out
+
+
+@pytest.mark.parametrize(("level", "written"), [(70.0, "Z70.0000"), (0.0, "Z50.0000")])
+def test_the_vertical_is_taken_at_its_level_never_below_the_clearance_plane(
+        level: float, written: str) -> None:
+    nc = text("fanuc", program(SIDE, replace(VERTICAL, clearance_z=level)))
+    assert nc.split("G53 A0 C0\n")[1].startswith(f"G0 G43 H20 {written}\n")

@@ -119,6 +119,7 @@ class Fanuc(MacroB):
         self.lib = self.library_for(s.library_number, s.variable_base, s.units,
                                     s.options or ())
         self.frame, self.axes, self.tool, self.ball = None, (), s.tool_number, s.ball_diameter
+        self.level = s.clearance_z
         blocks = [] if self.restate is None else [
             {"kind": "lines", "lines": fanuc_orient.restate_lines(self, self.restate)}]
         blocks += [self.block(node) for node in nodes]

@@ -21,8 +21,9 @@ What the Fanuc dialect writes (``docs/dialects.md``, "Orientations and stylus ch
   decimals (IS-C): a rounded angle moves a point 200 mm from the origin by at most 0.2 µm.
 * The ``Orient`` back to the vertical (the identity) after a tilted one: ``G53 Z0``,
   ``G69``, ``G53 A0 C0`` (the rotary axes the orientations name, back to the machine
-  zero where the work offset was set), then ``G0 G43 H<tool> Z<clearance plane>``.
-  An identity ``Orient`` while no frame is in force writes its comment only.
+  zero where the work offset was set), then ``G0 G43 H<tool> Z<clearance>`` (the
+  orientation's level, never below the program's clearance plane).  An identity
+  ``Orient`` while no frame is in force writes its comment only.
 * The controller option ``G68.2`` (``[controller] options``) must be declared for a
   tilted ``Orient``: a program whose setup states options without it is refused; the
   header's reset block then always holds ``G69``.
@@ -96,13 +97,16 @@ def length_offset(d: MacroB, z: float) -> str:
 
 
 def clearance(d: MacroB) -> float:
-    """The clearance level in force: the frame's, else the program's clearance plane."""
-    return d.frame.clearance_z if d.frame is not None else setup(d).clearance_z
+    """The clearance level in force: the tilted frame's, else the vertical's (the
+    program's clearance plane, or the higher level the last vertical ``Orient`` gave)."""
+    return d.frame.clearance_z if d.frame is not None else d.level
 
 
 def orient_lines(d: MacroB, node: ir.Orient) -> list[str]:
     """The blocks of an ``Orient`` (module docstring); updates the frame in force."""
     lines = [f"({describe(d, node)})"]
+    if not tilted(node):
+        d.level = max(node.clearance_z, setup(d).clearance_z)
     if tilted(node):
         require_tilt(d, node)
         d.axes = tuple(axis for axis, _ in node.rotary) or d.axes

@@ -57,6 +57,8 @@ class MacroB(Dialect):
         """The tool (and length offset) number of the stylus in the spindle."""
         self.ball = 0.0
         """Its ball diameter, mm."""
+        self.level = 0.0
+        """The clearance level of the vertical probe (work Z, mm)."""
         self.restate: ir.Orient | None = None
         """The frame a split part starts in (``split`` sets it): set again, no move."""
 
