@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import math
 import re
-import shutil
 import subprocess
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
 from conftest import REPO, assert_golden
+from test_linuxcnc import rs274  # noqa: F401  (the fixture: skips, or fails in CI, without it)
 
 from probegen import ir
 from probegen.dialects import get_dialect
@@ -233,10 +233,8 @@ def test_a_split_part_restates_the_frame_and_the_stylus() -> None:
 
 
 # -- rs274 -------------------------------------------------------------------------------------
-def test_rs274_runs_the_stylus_change(tmp_path: Path) -> None:
-    exe = shutil.which("rs274")
-    if exe is None:
-        pytest.skip("rs274 (Debian package linuxcnc-uspace) is not installed")
+def test_rs274_runs_the_stylus_change(tmp_path: Path, rs274: str) -> None:  # noqa: F811
+    exe = rs274
     prog = program(*TOP, D2, *SMALL, setup=PLAIN)
     (tmp_path / "program.ngc").write_text(text("linuxcnc", prog), encoding="ascii")
     (tmp_path / "tool.tbl").write_text("T20 P20 Z0 D6 ;probe\nT21 P21 Z0 D2 ;D2\n",
