@@ -15,6 +15,25 @@ Conventions (see ``docs/dialects.md``):
   ``OUTPUT/FA(<id>_<k>)``; the moves between become ``GOTO``.
 * A ``LocalFrame`` becomes ``D(name)=TRANS/XORIG,FA(f),YORIG,FA(f),ZORIG,FA(f)``; the frame in
   force at the start is saved as ``D(PCS)`` and recalled by ``RestoreFrame``.
+* Orientations and stylus changes (issue 17): every coordinate is written in work
+  coordinates (the nodes after an ``ir.Orient`` are in its frame: they are mapped back
+  with :func:`probegen.ir.frames.in_work`, the feature nominals ``F(..)=FEAT/...`` too),
+  and the moves around an orientation change are the IR's ``GOTO``s.  One sensor is
+  declared in the header per stylus and head orientation the program uses:
+  ``S(<label>)=SNSDEF/PROBE,INDEX,POL,a,b,0,0,-1,<length>,<ball>``, the start stylus at
+  A0 B0 keeping its ``PRB<tool>`` label, every other ``<stylus>_A<a>B<b>`` (``-`` written
+  ``M``, a decimal point ``P``: ``D2_A90BM90``).  Each ``Orient`` and ``SelectStylus``
+  selects the sensor of the stylus and head angles then in force: ``SNSLCT/S(...)``.
+  ``a`` and ``b`` are the head angles the ``Orient`` carries (``ir.Orient.head``),
+  written as they are: DMIS 5 ``SNSDEF/PROBE,INDEX,POL,tilt,rotation,i,j,k,len,diam``
+  (the probe head's A angle, the tilt of the stylus away from the head's mounting axis,
+  and its B angle, the rotation about that axis, as CMM software names them
+  ``T1A90B90``; ``0,0,-1`` the mounting direction, the stylus straight down at A0 B0;
+  ``len`` from the head's centre of rotation to the ball centre).  Which way B0 points
+  when tilted is the CMM's own convention: the planner chooses the angles
+  (``planning/orient.py``), the virtual CMM reads them back (``sim/cmm/sensors.py``).
+  A tilted ``Orient`` without head angles is refused (a CMM turns its probe only through
+  the head).
 * DMIS has no run-time arithmetic: ``ir.Var``, ``Assign`` and ``ReportCentre`` are
   unsupported.
 * The in-process decisions (``ir_actions``): tolerances and the part frame, see
@@ -24,11 +43,29 @@ Conventions (see ``docs/dialects.md``):
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from probegen import ir
 from probegen.dialects.base import Dialect
 from probegen.dialects.dmis_actions import check_lines, frame_lines
+from probegen.errors import UnsupportedError
+from probegen.ir import frames
+
+
+@dataclass(frozen=True, slots=True)
+class Sensor:
+    """A stylus as a DMIS sensor: its label, length (head centre to ball centre) and ball
+    diameter, mm."""
+
+    label: str
+    length: float
+    ball: float
+
+
+def label_angle(text: str) -> str:
+    """A head angle as label characters: ``-`` as ``M``, the decimal point as ``P``."""
+    return text.replace("-", "M").replace(".", "P")
 
 
 class Dmis(Dialect):
@@ -63,16 +100,84 @@ class Dmis(Dialect):
         final = (ir.SetWorkOffset, ir.Align, ir.UpdateTool)
         self.directions = {n.feature: n.direction for n in program.body
                            if isinstance(n, ir.Check) and n.fit == "line"}
-        body = [self.block(node) for node in program.body if not isinstance(node, final)]
+        self.start = Sensor(f"PRB{s.tool_number}", s.probe_length, s.ball_diameter)
+        self.sensors: dict[str, dict[str, str]] = {}
+        self.stylus, self.head = self.start, (0.0, 0.0)
+        self.sensor_label()
+        body = [self.block(node) for node in self.in_work(program.body)
+                if not isinstance(node, final)]
         frame = frame_lines(self, [n for n in program.body if isinstance(n, final)],
                             [n.feature for n in program.body if isinstance(n, ir.Check)],
                             self.directions)
         if frame:
             body.append({"kind": "lines", "lines": frame})
-        frames = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))
-        return {"s": s, "units": self.UNITS_WORD[s.units], "body": body, "frames": frames,
-                "length": self.length(s.probe_length), "ball": self.length(s.ball_diameter),
+        local = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))
+        return {"s": s, "units": self.UNITS_WORD[s.units], "body": body, "frames": local,
+                "sensors": list(self.sensors.values()),
                 "posvel": self.feed(s.position_feed), "mesvel": self.feed(s.probe_feed)}
+
+    def in_work(self, body: tuple[ir.Node, ...]) -> list[ir.Node]:
+        """The top-level nodes in work coordinates (:func:`probegen.ir.frames.in_work`).
+
+        Raises:
+            UnsupportedError: a local frame inside a tilted orientation (its coordinates
+                are relative to a measured centre, not to the orientation's frame).
+        """
+        out: list[ir.Node] = []
+        for node, orient in frames.in_work(body):
+            turned = orient is not None and not isinstance(node, ir.Orient) and (
+                not frames.is_identity(orient.rotation) or any(orient.origin))
+            if turned and isinstance(node, ir.LocalFrame | ir.RestoreFrame):
+                raise self.unsupported(node, f"a local frame inside orientation "
+                                             f"{orient.name}")  # type: ignore[union-attr]
+            out.append(node)
+        return out
+
+    def sensor_label(self) -> str:
+        """The label of the sensor for the stylus and head angles in force, declared on
+        first use (the start stylus at A0 B0 is ``PRB<tool>``, module docstring)."""
+        a, b = self.head
+        st = self.stylus
+        label = st.label if st == self.start and a == 0.0 and b == 0.0 else \
+            f"{st.label}_A{label_angle(self.angle(a))}B{label_angle(self.angle(b))}"
+        if label not in self.sensors:
+            self.sensors[label] = {"label": label, "a": self.angle(a), "b": self.angle(b),
+                                   "length": self.length(st.length),
+                                   "ball": self.length(st.ball)}
+        return label
+
+    def angle(self, value: float) -> str:
+        """A head angle, deg, with the digits it needs (``90``, ``-172.5``)."""
+        return self.num(value, 4).rstrip("0").rstrip(".")
+
+    def select(self, comment: str) -> dict[str, Any]:
+        """``SNSLCT`` of the sensor now in force, after a comment."""
+        return {"kind": "lines", "lines": [f"$$ {comment}", f"SNSLCT/S({self.sensor_label()})"]}
+
+    def orient(self, node: ir.Orient) -> dict[str, Any]:
+        """An orientation: the head angles it carries (A0 B0 for the identity).
+
+        Raises:
+            UnsupportedError: a turned frame without head angles.
+        """
+        if node.head is not None:
+            self.head = (float(node.head[0]), float(node.head[1]))
+        elif frames.is_identity(node.rotation):
+            self.head = (0.0, 0.0)
+        else:
+            raise UnsupportedError(
+                f"dialect {self.NAME!r}: orientation {node.name} turns the probe but gives no "
+                "head angles (ir.Orient.head): a CMM turns its stylus with the indexable "
+                "head; give the machine profile a [head]")
+        return self.select(f"ORIENT {node.name}")
+
+    def select_stylus(self, node: ir.SelectStylus) -> dict[str, Any]:
+        """Another stylus of the rack, at the head angles in force."""
+        start = self.start
+        same = (node.tool_number, node.ball_diameter) == (
+            self.limits.tool_number if self.limits else -1, start.ball)
+        self.stylus = start if same else Sensor(node.label, node.length, node.ball_diameter)
+        return self.select(f"STYLUS {node.label}")
 
     def block(self, node: ir.Node) -> dict[str, Any]:
         """One top-level IR node as the values its template macro prints."""
@@ -93,6 +198,10 @@ class Dmis(Dialect):
             return {"kind": "restore"}
         if isinstance(node, ir.Check):
             return {"kind": "lines", "lines": check_lines(self, node)}
+        if isinstance(node, ir.Orient):
+            return self.orient(node)
+        if isinstance(node, ir.SelectStylus):
+            return self.select_stylus(node)
         raise self.unsupported(node, "DMIS has no run-time arithmetic")
 
     def move(self, node: ir.Move) -> dict[str, Any]:

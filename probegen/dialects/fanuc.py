@@ -30,6 +30,8 @@ Conventions this dialect follows (see ``docs/dialects.md`` and the Fanuc manuals
   commanded point too (the reader adds the shift back).
 * ``ir.WorkOffsetShift``: ``G91 G10 L2 Pn X.. Y.. Z..`` (in G91 the values add to the
   offset), then ``G90``.
+* ``ir.Orient`` and ``ir.SelectStylus`` (issue 17): ``G53 Z0``, ``G68.2``/``G53.1``/``G69``
+  and tool changes, :mod:`probegen.dialects.fanuc_orient`.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ import re
 from typing import Any, ClassVar
 
 from probegen import ir
+from probegen.dialects import fanuc_orient
 from probegen.dialects.fanuc_actions import lower_action, offset_words
 from probegen.dialects.macro_b import SCRATCH, MacroB
 from probegen.dialects.macro_library import (
@@ -115,12 +118,16 @@ class Fanuc(MacroB):
         self.moves: dict[str, int] = {}
         self.lib = self.library_for(s.library_number, s.variable_base, s.units,
                                     s.options or ())
-        blocks = [self.block(node) for node in nodes]
+        self.frame, self.axes, self.tool, self.ball = None, (), s.tool_number, s.ball_diameter
+        self.level = s.clearance_z
+        blocks = [] if self.restate is None else [
+            {"kind": "lines", "lines": fanuc_orient.restate_lines(self, self.restate)}]
+        blocks += [self.block(node) for node in nodes]
         if self.compact:
             blocks = self.bind(self.points(blocks))
         return {
             "s": s, "blocks": blocks, "units_code": self.UNITS_CODE[s.units],
-            "reset_codes": self.reset_block(s),
+            "reset_codes": self.header_reset(program),
             "ball": self.length(s.ball_diameter),
             "clearance": self.length(s.clearance_z),
             "first_var": self.base, "last_var": self.last_variable(self.base),
@@ -128,6 +135,14 @@ class Fanuc(MacroB):
             "work_offset": self.work_offset_word(s.work_offset),
             "library": self.library_header(s) if self.compact else None,
         }
+
+    def header_reset(self, program: ir.Program) -> tuple[str, ...]:
+        """The reset block, with ``G69`` added when the program turns the probe and the
+        profile's reset codes lack it (a program relies on no state it did not set)."""
+        codes = self.reset_block(program.setup)
+        if "G69" in codes or not fanuc_orient.needs_tilt(program.body, self.restate):
+            return codes
+        return (*codes, "G69")
 
     def last_variable(self, base: int) -> int:
         """The last common variable a program with variable base ``base`` uses: the
@@ -242,6 +257,10 @@ class Fanuc(MacroB):
             return self.rotary(node)
         if isinstance(node, ir.WorkOffsetShift):
             return self.offset_shift(node)
+        if isinstance(node, ir.Orient):
+            return {"kind": "lines", "lines": fanuc_orient.orient_lines(self, node)}
+        if isinstance(node, ir.SelectStylus):
+            return {"kind": "lines", "lines": fanuc_orient.stylus_lines(self, node)}
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
 
     def rotary(self, node: ir.Rotary) -> dict[str, Any]:
@@ -281,7 +300,7 @@ class Fanuc(MacroB):
                 "limit": self.num(self.scale(self.CHECK_SUM)), "label": self.next_label()}
 
     def touch(self, node: ir.Touch) -> dict[str, Any]:
-        r = self.setup.ball_diameter / 2.0
+        r = self.ball / 2.0
         k = r - node.overtravel
         end = tuple(c + k * n for c, n in zip(node.contact, node.normal, strict=True))
         stores = [f"{self.var(name)}=#{5061 + axis}" for axis, name in enumerate(node.store)

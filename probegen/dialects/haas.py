@@ -38,6 +38,15 @@ class Haas(Fanuc):
     WIPS probe; #709 is the fixture-clamp input).  #150-#199 hold probe results when a
     probe is installed: writing them only overwrites the last results."""
 
+    TILT_REFUSAL: ClassVar[str] = (
+        "probegen writes no Haas tilted plane yet: the Haas manual pages at hand state "
+        "G254 DWO (whose coordinates are those of the turned part along the machine axes, "
+        "which need the machine's rotary kinematics) but not the angle convention of "
+        "G268 I J K Q, and a wrong convention turns the frame the wrong way; measure this "
+        "feature in a setup of its own ([[setup]]), or post with -d fanuc if the control "
+        "runs G68.2/G53.1")
+    """Why a tilted ``ir.Orient`` is refused (``docs/dialects.md``: what was checked)."""
+
     # ALARM_TEXT_LENGTH: Fanuc's 26 characters, inherited: not checked against a Haas
     # manual; a message that short shows whole on any Macro B control.
 

@@ -31,6 +31,13 @@ reference):
   is commanded less the node's ``head_shift`` (no tool-centre-point control, as in the
   Fanuc dialect).  ``ir.WorkOffsetShift``: ``G10 L2 Pn X[#5221+dx] ...`` (the current
   value plus the shift, written out: LinuxCNC's G10 L2 does not add in G91).
+* Orientations and stylus changes (issue 17): an ``ir.Orient`` other than the identity
+  is refused (:data:`TILT_REFUSAL`: LinuxCNC turns a work plane only through a five-axis
+  kinematics module and its own G-codes, which this dialect does not configure); the
+  identity writes its comment.  ``ir.SelectStylus``: the probe-off codes, ``G53 G0 Z0``
+  (machine Z zero, LinuxCNC's home convention for a mill's Z at the top of its travel),
+  ``T<n> M6``, ``G0 G43 H<n> Z<clearance>``, the probe-on codes; the touches after it use
+  that stylus's ball.
 * Run-time values are global named parameters ``#<_pg_name>``; ``variable_base`` is not
   used (numbered parameters would share the operator's ``#31-#5000``).
 * Compact form (``compact``, ``compile --compact``; the inline form is the default):
@@ -56,6 +63,7 @@ from probegen.constants import tol
 from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import feature_owners
 from probegen.errors import UnsupportedError
+from probegen.ir import frames
 from probegen.ir.actions import describe
 
 LIBRARY: dict[str, str] = {
@@ -83,6 +91,11 @@ _ACTIVE_COMMENT = re.compile(
     r"\s*(MSG|DEBUG|PRINT|LOG|LOGOPEN|LOGAPPEND|LOGCLOSE|PROBEOPEN|PROBECLOSE|ABORT|PY)\b",
     re.IGNORECASE)
 """Comments that rs274ngc acts on (message, log, probe log, abort, Python)."""
+
+
+TILT_REFUSAL = ("LinuxCNC: a tilted frame needs a five-axis kinematics this dialect does "
+                "not configure; plan this feature with a setup or on a CMM")
+"""The message for a tilted ``ir.Orient``."""
 
 
 class LinuxCnc(Dialect):
@@ -126,6 +139,8 @@ class LinuxCnc(Dialect):
         self.position: ir.Point | None = None
         self.errors: dict[str, int] = {}
         self.error_of: str | None = None
+        self.ball = 0.0
+        """The ball diameter of the stylus in the spindle, mm."""
 
     def library_files(self, first: int, base: int, units: str,
                       options: tuple[str, ...] = ()) -> dict[str, str]:
@@ -194,6 +209,7 @@ class LinuxCnc(Dialect):
         self.owners = feature_owners(nodes)
         self.moves: dict[str, int] = {}
         self.errors, self.error_of = {}, None
+        self.ball = s.ball_diameter
         offset_check = self.next_label()
         blocks = [self.block(n) for n in nodes]
         library = None
@@ -220,6 +236,11 @@ class LinuxCnc(Dialect):
             return {"kind": "rotary", "words": self.rotary_words(node)}
         if isinstance(node, ir.WorkOffsetShift):
             return self.offset_shift(node)
+        if isinstance(node, ir.Orient):
+            return self.orient(node)
+        if isinstance(node, ir.SelectStylus):
+            self.position = None
+            return {"kind": "lines", "lines": self.stylus(node)}
         if isinstance(node, ir.Comment):
             return {"kind": "comment", "text": self.comment(node.text)}
         if isinstance(node, ir.FeatureBlock):
@@ -243,6 +264,25 @@ class LinuxCnc(Dialect):
                                    f"the in-process decisions are emitted for fanuc and haas "
                                    f"(and tolerances and frames for dmis) only")
         raise self.unsupported(node, "no run-time frames; use run-time variables instead")
+
+    def orient(self, node: ir.Orient) -> dict[str, Any]:
+        """The identity's comment; any other orientation is refused.
+
+        Raises:
+            UnsupportedError: :data:`TILT_REFUSAL`, naming the orientation.
+        """
+        if not frames.is_identity(node.rotation) or any(node.origin):
+            raise UnsupportedError(f"{TILT_REFUSAL} (orientation {node.name})")
+        return {"kind": "comment", "text": self.comment(f"ORIENT {node.name}")}
+
+    def stylus(self, node: ir.SelectStylus) -> list[str]:
+        """The tool change to another stylus (module docstring)."""
+        self.ball = node.ball_diameter
+        s = self.setup
+        return [f"({self.comment(f'STYLUS {node.label} T{node.tool_number}')} BALL "
+                f"D{self.length(node.ball_diameter)})", *s.probe_off, "G53 G0 Z0",
+                f"T{node.tool_number} M6",
+                f"G0 G43 H{node.tool_number} Z{self.length(s.clearance_z)}", *s.probe_on]
 
     def offset_shift(self, node: ir.WorkOffsetShift) -> dict[str, Any]:
         """``G10 L2 Pn`` with each axis its current value plus the shift (G10 L2 ignores
@@ -282,7 +322,7 @@ class LinuxCnc(Dialect):
         return self.errors[feature]
 
     def touch(self, node: ir.Touch) -> dict[str, Any]:
-        k = self.setup.ball_diameter / 2.0 - node.overtravel
+        k = self.ball / 2.0 - node.overtravel
         end = [c + k * n for c, n in zip(node.contact, node.normal, strict=True)]
         stores = [f"{self.param(name)} = #{5061 + axis}"
                   for axis, name in enumerate(node.store) if name is not None]

@@ -37,6 +37,9 @@ class MacroB(Dialect):
     Fanuc 0i series (a longer one is cut on the alarm screen, and some controls refuse
     the block); ``fanuc_actions.alarm_text`` keeps probegen's texts within it and
     :meth:`check_messages` refuses any longer one."""
+    TILT_REFUSAL: ClassVar[str] = ""
+    """Why the dialect writes no tilted frame ("": it writes G68.2/G53.1,
+    :mod:`probegen.dialects.fanuc_orient`)."""
     CHECK_SUM: ClassVar[float] = 5.0 * tol.skip_check
     """A skip position within this (sum of |dX|+|dY|+|dZ|, mm) of the end point means the
     skip did not fire: the end point itself is rounded to the least input increment."""
@@ -46,6 +49,18 @@ class MacroB(Dialect):
         self.vars: dict[str, int] = {}
         self.base = 100
         self.label = 1000
+        self.frame: ir.Orient | None = None
+        """The tilted frame in force where the program being written stands."""
+        self.axes: tuple[str, ...] = ()
+        """The rotary axes the orientations name (returned to 0 at the vertical)."""
+        self.tool = 0
+        """The tool (and length offset) number of the stylus in the spindle."""
+        self.ball = 0.0
+        """Its ball diameter, mm."""
+        self.level = 0.0
+        """The clearance level of the vertical probe (work Z, mm)."""
+        self.restate: ir.Orient | None = None
+        """The frame a split part starts in (``split`` sets it): set again, no move."""
 
     def var(self, name: str) -> str:
         """The ``#n`` holding run-time value ``name`` (allocated on first use)."""

@@ -28,6 +28,13 @@ never where a value measured before the cut is read after it (a located feature,
 in-process decision that reads an earlier feature's results: they stay in one part, or
 the split is refused with that reason).
 
+Orientations and stylus changes (issue 17): a part that starts after an ``ir.Orient`` or an
+``ir.SelectStylus`` re-establishes them: its header takes the length offset of the stylus
+in the spindle (the tool change itself stays in the part that made it), and a tilted frame
+in force is set again without a move (``G68.2``, ``G53.1``, ``G43 H``: the header's reset
+cancelled it with ``G69``; the rotary axes stand where the previous part left them),
+as the last rotary pose (``ir.Rotary``) is restated.
+
 One difference in the log when a move fails: the protected moves after a part's last
 touch (the climb back to the clearance plane) count as its last feature's moves, so an
 unexpected trigger there prints ``ERR COLLISION <that feature> <n>``, where the unsplit
@@ -40,6 +47,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 
 from probegen import ir
+from probegen.dialects import fanuc_orient
 from probegen.dialects.base import Dialect
 from probegen.dialects.fanuc import Fanuc
 from probegen.errors import UnsupportedError
@@ -290,17 +298,37 @@ def read(node: ir.Node) -> Iterator[str]:
 # -- the texts ----------------------------------------------------------------------------
 
 def part_text(dialect: Fanuc, program: ir.Program, start: int, end: int, k: int) -> str:
-    """The whole-program text of ``body[start:end]`` as part ``k`` (its own number, the
-    last rotary pose before it restated), written by a fresh dialect of the same kind."""
+    """The whole-program text of ``body[start:end]`` as part ``k`` (its own number; the
+    last rotary pose before it restated; the stylus in the spindle as its probe, whose
+    ``G43 H`` its header takes; the tilted frame in force set again without a move),
+    written by a fresh dialect of the same kind."""
     body = program.body
     pose = [n for n in ir.walk(body[:start]) if isinstance(n, ir.Rotary)][-1:]
-    s = program.setup
+    s = in_spindle(program.setup, body[:start])
     sub = ir.Program(replace(s, program_number=s.program_number + k,
                              program_name=f"{s.program_name} PART {k}"[:40]),
                      (*pose, *body[start:end]))
     fresh = _like(dialect)
     fresh.preset_numbers = dialect.feature_numbers  # the whole program's (fit generated it)
+    fresh.restate = frame_in_force(body[:start])
     return subprogram(fresh.generate(sub), s, k)
+
+
+def in_spindle(s: ir.Setup, before: tuple[ir.Node, ...]) -> ir.Setup:
+    """The setup with the stylus the last ``SelectStylus`` of ``before`` took as its probe
+    (``s`` itself when there is none)."""
+    taken = [n for n in before if isinstance(n, ir.SelectStylus)][-1:]
+    if not taken:
+        return s
+    st = taken[0]
+    return replace(s, tool_number=st.tool_number, ball_diameter=st.ball_diameter,
+                   shank_diameter=st.shank_diameter, probe_length=st.length)
+
+
+def frame_in_force(before: tuple[ir.Node, ...]) -> ir.Orient | None:
+    """The tilted orientation in force after ``before`` (None: the vertical probe)."""
+    last = [n for n in before if isinstance(n, ir.Orient)][-1:]
+    return last[0] if last and fanuc_orient.tilted(last[0]) else None
 
 
 def _like(dialect: Fanuc) -> Fanuc:
