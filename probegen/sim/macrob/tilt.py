@@ -1,0 +1,150 @@
+"""The tilted working plane of the virtual control: ``G68.2``, ``G53.1``, ``G69`` (Fanuc)
+and ``G268``, ``G253``, ``G269`` (Haas NGC, read as the Fanuc codes), on a trunnion
+table (A tilts the table about machine X, C turns it about the table's own axis).
+
+Conventions (docs/sim.md, "Tilted working plane"):
+
+* ``G68.2 X Y Z I J K``: the feature coordinate system, origin ``(X, Y, Z)`` in work
+  coordinates (absolute, even under G91; an omitted word is 0) and Euler angles
+  ``R = Rz(I)·Rx(J)·Rz(K)`` (deg), exactly :func:`probegen.ir.frames.from_euler_zxz`:
+  a program point ``p`` is the work point ``origin + R·p``.  The block does not move.
+  ``P`` (other angle forms) and, on Haas, ``Q`` (another Euler order) are alarm 9010.
+* ``G53.1``: the rotary axes turn so that the tool axis (machine +Z, the spindle is
+  vertical) is the frame's +Z: the table turns by ``T = Rx(A)·Rz(C)`` with ``A = -J``,
+  ``C = -I`` (then ``T·R = Rz(K)``), about the table's pivot (``Settings.table_pivot``,
+  machine coordinates).  The linear axes stand still while the table turns; the
+  machine checks the ball's path (:meth:`TiltMachine.tilt`).
+* Machine position under a frame: ``m = P + T·(q - P) + (0, 0, tool length)`` with
+  ``q = (origin + R·p + work offset) · unit`` (the control knows where its rotary axes
+  stand); without a frame (after ``G69``) the table's turn is not in the mapping: the
+  axes go where the numbers say, as on a control without tool centre point control.
+* Position variables under a frame (``#5001``-, ``#5041``-, ``#5061``-) read feature
+  coordinates, as under G68 (:mod:`probegen.sim.macrob.motion`); ``#5021``- the machine.
+* A G31 is alarm :data:`NOT_ALONG_FRAME` when the tool axis is not the frame's +Z (a
+  G68.2 without its G53.1, or a frame changed since), and :data:`TURNED_WITHOUT_FRAME`
+  when the table is turned and no frame is in force (the skip position would not be in
+  the part's coordinates).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+from probegen.ir.frames import IDENTITY, Rotation, apply, apply_t, from_euler_zxz
+from probegen.sim.alarms import SimAlarm
+from probegen.sim.macrob.base import Machine, Point
+
+NOT_ALONG_FRAME = 9020
+"""Alarm: a probing move under G68.2 with the tool axis not along the frame's +Z."""
+TURNED_WITHOUT_FRAME = 9021
+"""Alarm: a probing move with the table turned and no feature coordinate system."""
+ALONG = 1e-9
+"""Largest difference between the tool axis and the frame's +Z (unit vectors)."""
+TILT_CODE, TOOL_AXIS_CODE = 682, 531
+"""G68.2 and G53.1 in tenths."""
+
+
+@dataclass(frozen=True, slots=True)
+class FeatureFrame:
+    """A ``G68.2`` feature coordinate system.
+
+    Attributes:
+        origin: work coordinates of its origin, program unit.
+        euler: ``(I, J, K)``, deg.
+        rotation: ``Rz(I)·Rx(J)·Rz(K)``: its columns are the frame's axes in work
+            coordinates.
+    """
+
+    origin: tuple[float, float, float]
+    euler: tuple[float, float, float]
+    rotation: Rotation
+
+    @classmethod
+    def of(cls, origin: tuple[float, float, float],
+           euler: tuple[float, float, float]) -> FeatureFrame:
+        """The frame of a G68.2 block's words."""
+        return cls(origin, euler, from_euler_zxz(*euler))
+
+    def to_work(self, p: list[float]) -> list[float]:
+        """Feature coordinates → work coordinates."""
+        q = apply(self.rotation, (p[0], p[1], p[2]))
+        return [q[i] + self.origin[i] for i in range(3)]
+
+    def to_frame(self, w: list[float]) -> list[float]:
+        """Work coordinates → feature coordinates."""
+        o = self.origin
+        return list(apply_t(self.rotation, (w[0] - o[0], w[1] - o[1], w[2] - o[2])))
+
+    def tool_angles(self) -> dict[str, float]:
+        """The trunnion angles ``G53.1`` turns to, deg: ``A = -J``, ``C = -I``."""
+        return {"A": _clean(-self.euler[1]), "C": _clean(-self.euler[0])}
+
+
+def _clean(x: float) -> float:
+    return x + 0.0  # no -0.0
+
+
+def table_rotation(angles: dict[str, float]) -> Rotation:
+    """``T = Rx(A)·Rz(C)``: table frame → machine directions (deg)."""
+    a, c = math.radians(angles["A"]), math.radians(angles["C"])
+    ca, sa, cc, sc = math.cos(a), math.sin(a), math.cos(c), math.sin(c)
+    return ((cc, -sc, 0.0), (ca * sc, ca * cc, -sa), (sa * sc, sa * cc, ca))
+
+
+def turned(angles: dict[str, float]) -> bool:
+    """Whether the table stands anywhere but A0 C0."""
+    return angles["A"] != 0.0 or angles["C"] != 0.0
+
+
+def table_to_machine(q: list[float], rotation: Rotation, pivot: Point) -> list[float]:
+    """A table-frame point (mm) where the turned table carries it, machine mm."""
+    r = apply(rotation, (q[0] - pivot[0], q[1] - pivot[1], q[2] - pivot[2]))
+    return [r[i] + pivot[i] for i in range(3)]
+
+
+def machine_to_table(m: Point | list[float], rotation: Rotation,
+                     pivot: Point) -> list[float]:
+    """The inverse of :func:`table_to_machine`."""
+    r = apply_t(rotation, (m[0] - pivot[0], m[1] - pivot[1], m[2] - pivot[2]))
+    return [r[i] + pivot[i] for i in range(3)]
+
+
+def tool_axis_in_work(rotation: Rotation) -> tuple[float, float, float]:
+    """The tool axis (machine +Z) in table (work) directions under table turn ``rotation``."""
+    return apply_t(rotation, (0.0, 0.0, 1.0))
+
+
+def along_frame(frame: FeatureFrame, rotation: Rotation) -> bool:
+    """Whether the tool axis is the frame's +Z (within :data:`ALONG`)."""
+    tool = tool_axis_in_work(rotation)
+    z = (frame.rotation[0][2], frame.rotation[1][2], frame.rotation[2][2])
+    return max(abs(tool[i] - z[i]) for i in range(3)) <= ALONG
+
+
+def check_probing(frame: FeatureFrame | None, angles: dict[str, float],
+                  rotation: Rotation) -> None:
+    """Refuse a probing move the tilted plane makes wrong (module docstring)."""
+    if frame is not None and not along_frame(frame, rotation):
+        i, j, k = frame.euler
+        raise SimAlarm(NOT_ALONG_FRAME, f"PROBING UNDER G68.2 I{i:g} J{j:g} K{k:g} WITH THE "
+                       f"TOOL AXIS NOT ALONG THE FRAME'S Z (TABLE A{angles['A']:g} "
+                       f"C{angles['C']:g}): G53.1 MISSING")
+    if frame is None and turned(angles):
+        raise SimAlarm(TURNED_WITHOUT_FRAME, f"PROBING WITH THE TABLE TURNED (A"
+                       f"{angles['A']:g} C{angles['C']:g}) AND NO G68.2: THE SKIP POSITION "
+                       "WOULD NOT BE IN THE PART'S COORDINATES")
+
+
+class TiltMachine(Machine, Protocol):
+    """A machine with a trunnion table: the control calls :meth:`tilt` for G53.1."""
+
+    def tilt(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        """Turn the table from ``start`` to ``end`` (``{"A": deg, "C": deg}``, machine
+        angles, linear in angle) with the linear axes at ``at`` (machine mm)."""
+        ...
+
+
+__all__ = ["IDENTITY", "FeatureFrame", "TiltMachine", "along_frame", "check_probing",
+           "machine_to_table", "table_rotation", "table_to_machine", "turned"]

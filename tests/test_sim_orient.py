@@ -1,0 +1,195 @@
+"""The virtual machine executes a tilted working plane and stylus changes (issue 17).
+
+Hand-written Macro B programs, as the control reads them, probe a bore in the +X side
+face of a block (built here with build123d) under ``G68.2`` with the frame's Z along
++X (``ir.frames.frame_for``) on a trunnion table; ``#5061``-``#5063`` are in the feature
+coordinate system.  The same with a planted part offset, a tool change to a 2 mm
+stylus of the rack, the Haas forms, and the alarms.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numpy as np
+import pytest
+from build123d import Align, Box, Cylinder, Pos, Rot, export_step
+
+from probegen import cad
+from probegen.ir import frames
+from probegen.machine.probe_model import ProbeModel
+from probegen.machine.profile import Stylus, load_profile
+from probegen.sim.contact import PlacedPart
+from probegen.sim.vm import UNKNOWN_TOOL, WRONG_LENGTH, VirtualMachine, run_text
+
+BORE_AXIS_YZ = (30.0, 20.0)
+"""The side bore's axis (along X) at work Y 30, Z 20; D20, 25 deep from the face X 80."""
+BORE_RADIUS = 10.0
+FACE_X = 80.0
+WORK = (0.0, 0.0, -400.0)
+"""G54: machine Z0 (G53 Z0) is 400 mm above the work origin; the table pivots there."""
+RACK = (Stylus("D6", 6.0, 4.5, 50.0, 20), Stylus("D2", 2.0, 1.4, 30.0, 21))
+AXIS = (1.0, 0.0, 0.0)
+ROTATION = frames.frame_for(AXIS)
+I, J, K = frames.euler_zxz(ROTATION)
+ORIGIN = (FACE_X, *BORE_AXIS_YZ)
+
+
+@pytest.fixture(scope="module")
+def side_bore(tmp_path_factory: pytest.TempPathFactory) -> cad.Part:
+    block = Box(80.0, 60.0, 40.0, align=(Align.MIN, Align.MIN, Align.MIN))
+    hole = Pos(FACE_X, *BORE_AXIS_YZ) * Rot(0, 90, 0) * Cylinder(
+        BORE_RADIUS, 50.0, align=(Align.CENTER, Align.CENTER, Align.CENTER))
+    path = tmp_path_factory.mktemp("side") / "side_bore.step"
+    export_step(block - hole, str(path))
+    return cad.load_part(str(path))
+
+
+def machine(part: cad.Part, shift: tuple[float, float, float] = (0.0, 0.0, 0.0),
+            rack: tuple[Stylus, ...] = RACK) -> VirtualMachine:
+    placed = PlacedPart.from_model(part, translation=np.add(WORK, shift))
+    profile = load_profile("samples/machines/vmc-fanuc.toml")
+    styli = dataclasses.replace(profile, rack=rack).styli() if rack else ()
+    return VirtualMachine(placed, ProbeModel(3.0), rack=styli, pivot=WORK)
+
+
+def program(*, tool: int = 20, g682: str = "G68.2", g531: str | None = "G53.1",
+            g69: str = "G69") -> str:
+    """Probe the side bore at frame depth -10 along frame +X, -X, +Y, -Y; keep each
+    skip position at full precision in #101- and print it."""
+    touches = []
+    for n, (x, y) in enumerate(((12.0, 0.0), (-12.0, 0.0), (0.0, 12.0), (0.0, -12.0))):
+        v = 101 + 3 * n
+        touches.append(f"G31 X{x:.1f} Y{y:.1f} F200.\n#{v}=#5061\n#{v + 1}=#5062\n"
+                       f"#{v + 2}=#5063\nDPRNT[PT*X#5061[44]*Y#5062[44]*Z#5063[44]]\n"
+                       "G1 X0. Y0. F1000.\n")
+    tilt = "" if g531 is None else g531 + "\n"
+    return (f"%\nO1000(SIDE BORE)\nG21\nG90 G17 G40 G49 G80 G94 G69\nT{tool} M6\nG54\n"
+            f"G0 G43 H{tool} Z100.\nG53 Z0.\n"
+            f"{g682} X{ORIGIN[0]:.1f} Y{ORIGIN[1]:.1f} Z{ORIGIN[2]:.1f} "
+            f"I{I:.4f} J{J:.4f} K{K:.4f}\n{tilt}"
+            "G0 X0. Y0. Z30.\nG1 Z-10. F1000.\nPOPEN\n" + "".join(touches) +
+            f"G0 Z30.\nG53 Z0.\n{g682} X0. Y0. Z0. I0. J0. K0.\n{tilt}{g69}\n"
+            "PCLOS\nM30\n%\n")
+
+
+def skip_points(result_variables: dict[int, float]) -> np.ndarray:
+    return np.array([[result_variables[101 + 3 * n + i] for i in range(3)]
+                     for n in range(4)])
+
+
+def in_frame(work_point: np.ndarray) -> np.ndarray:
+    return np.array(frames.to_frame(_orient(), tuple(work_point)))
+
+
+def _orient() -> frames.ir.Orient:
+    return frames.ir.Orient("TILT1", ROTATION, ORIGIN)
+
+
+def test_skip_positions_are_in_the_frame_and_on_the_bore(side_bore: cad.Part) -> None:
+    assert (I, J, K) == (90.0, 90.0, 0.0)
+    vm = machine(side_bore)
+    res = run_text(program(), vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is None, res.alarm
+    assert res.touches == 4
+    points = skip_points(res.variables)
+    # the ball centre at each trigger (table frame = machine at A0 C0 = work + G54)
+    for printed, hit in zip(points, vm.touches, strict=True):
+        centre = np.asarray(hit.centre) - WORK
+        assert np.allclose(printed, in_frame(centre), atol=1e-9, rtol=0.0)
+        work = np.array(frames.to_work(_orient(), tuple(printed)))
+        radial = np.hypot(work[1] - BORE_AXIS_YZ[0], work[2] - BORE_AXIS_YZ[1])
+        assert radial == pytest.approx(BORE_RADIUS - 3.0, abs=1e-9)  # on the bore, ball 3
+        assert work[0] == pytest.approx(FACE_X - 10.0, abs=1e-9)
+        assert np.asarray(hit.point)[0] - WORK[0] == pytest.approx(FACE_X - 10.0, abs=1e-9)
+    assert points[0] == pytest.approx((7.0, 0.0, -10.0), abs=1e-9)
+    assert "PT X7.0000 Y.0000 Z-10.0000" in res.output
+    assert vm.table == {"A": 0.0, "C": 0.0}  # turned back by the last G68.2 + G53.1
+
+
+def test_planted_part_offset_is_recovered_in_the_frame(side_bore: cad.Part) -> None:
+    shift = (0.05, -0.03, 0.02)
+    res = run_text(program(), machine(side_bore, shift), kind="macrob", work_offset=WORK)
+    assert res.alarm is None, res.alarm
+    p = skip_points(res.variables)
+    centre = ((p[0, 0] + p[1, 0]) / 2.0, (p[2, 1] + p[3, 1]) / 2.0)
+    expected = frames.apply_t(ROTATION, shift)  # (-0.03, 0.02, 0.05): Y, Z, X of work
+    assert centre == pytest.approx(expected[:2], abs=1e-6)
+    work = frames.direction_to_work(_orient(), (*centre, 0.0))
+    assert work == pytest.approx((0.0, shift[1], shift[2]), abs=1e-6)
+
+
+def test_tool_change_to_the_2mm_stylus_changes_the_contact(side_bore: cad.Part) -> None:
+    vm = machine(side_bore)
+    res = run_text(program(tool=21), vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is None, res.alarm
+    assert vm.stylus == RACK[1]
+    p = skip_points(res.variables)
+    assert p[0] == pytest.approx((9.0, 0.0, -10.0), abs=1e-9)  # ball centre 1 mm off
+    for hit in vm.touches:
+        assert np.linalg.norm(np.asarray(hit.centre) - hit.point) == pytest.approx(1.0)
+
+
+def test_haas_g268_g253_g269_run_as_g682(side_bore: cad.Part) -> None:
+    fanuc = run_text(program(), machine(side_bore), kind="macrob", work_offset=WORK)
+    haas = run_text(program(g682="G268", g531="G253", g69="G269"), machine(side_bore),
+                    kind="macrob", work_offset=WORK, control="haas")
+    assert haas.alarm is None, haas.alarm
+    assert haas.output == fanuc.output
+    wrong = run_text(program(), machine(side_bore), kind="macrob", work_offset=WORK,
+                     control="haas")
+    assert wrong.alarm is not None and wrong.alarm.startswith("10 IMPROPER G-CODE (G68.2)")
+    assert run_text(program(g682="G268"), machine(side_bore), kind="macrob",
+                    work_offset=WORK).alarm.startswith("10 ")  # type: ignore[union-attr]
+
+
+def test_unknown_tool_is_an_alarm_naming_it(side_bore: cad.Part) -> None:
+    res = run_text(program(tool=7), machine(side_bore), kind="macrob", work_offset=WORK)
+    assert res.alarm is not None
+    assert res.alarm.startswith(f"{UNKNOWN_TOOL} TOOL T7 IS NOT IN THE RACK")
+    assert "T21 D2 D2" in res.alarm and res.touches == 0
+    # without a rack the probe never changes (programs before issue 17)
+    free = run_text(program(tool=7), machine(side_bore, rack=()), kind="macrob",
+                    work_offset=WORK)
+    assert free.alarm is None and skip_points(free.variables)[0][0] == pytest.approx(7.0)
+
+
+def test_length_offset_of_another_tool_is_an_alarm(side_bore: cad.Part) -> None:
+    text = program(tool=21).replace("G43 H21", "G43 H20")
+    res = run_text(text, machine(side_bore), kind="macrob", work_offset=WORK)
+    assert res.alarm is not None and res.alarm.startswith(f"{WRONG_LENGTH} G43 H20 WITH T21")
+
+
+def test_g682_without_g531_before_probing_is_an_alarm(side_bore: cad.Part) -> None:
+    vm = machine(side_bore)
+    text = program(g531=None).replace("G0 X0. Y0. Z30.\nG1 Z-10. F1000.",
+                                      "G0 X0. Y0. Z300.")
+    res = run_text(text, vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is not None and res.alarm.startswith("9020 PROBING UNDER G68.2 I90 J90 K0")
+    assert "G53.1 MISSING" in res.alarm and res.touches == 0
+
+
+def test_probing_with_the_table_turned_and_no_frame_is_an_alarm(side_bore: cad.Part) -> None:
+    text = program().replace("G0 X0. Y0. Z30.\nG1 Z-10. F1000.",
+                             "G69\nG0 X200. Y200. Z0.", 1)
+    res = run_text(text, machine(side_bore), kind="macrob", work_offset=WORK)
+    assert res.alarm is not None and res.alarm.startswith("9021 PROBING WITH THE TABLE TURNED")
+
+
+def test_g53_moves_under_a_frame_are_machine_moves(side_bore: cad.Part) -> None:
+    from probegen.sim.macrob.machine import FreeMachine, run_program
+
+    text = ("G90 G54\nG68.2 X80. Y30. Z20. I90. J90. K0.\nG53.1\nG53 X10. Y20. Z0.\n"
+            "#101=#5021\n#102=#5022\n#103=#5023\n#104=#5041\n#105=#5042\n#106=#5043\n"
+            "G0 X0. Y0. Z30.\n#107=#5021\n#108=#5022\n#109=#5023\nM30\n")
+    free = FreeMachine(record=True)
+    res = run_program(text, free, variables={5223: WORK[2]})
+    v = res.variables
+    assert (v[101], v[102], v[103]) == (10.0, 20.0, 0.0)
+    # the frame point (0, 0, 30) is work (110, 30, 20): table (110, 30, -380) turned
+    # about the pivot at machine 0 (Settings default) by Rx(-90)·Rz(-90): (y, z, x)
+    assert (v[107], v[108], v[109]) == pytest.approx((30.0, -380.0, 110.0), abs=1e-12)
+    # #5041-: machine (10, 20, 0) is table (0, 10, 20), work (0, 10, 420), frame R^T(w - o)
+    assert (v[104], v[105], v[106]) == pytest.approx((-20.0, 400.0, -80.0), abs=1e-12)
+    assert free.turns == [({"A": 0.0, "C": 0.0}, {"A": -90.0, "C": -90.0})]
+
+
