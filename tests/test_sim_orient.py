@@ -18,6 +18,7 @@ from probegen import cad
 from probegen.ir import frames
 from probegen.machine.probe_model import ProbeModel
 from probegen.machine.profile import Stylus, load_profile
+from probegen.results import parse_dmis_output
 from probegen.sim.contact import PlacedPart
 from probegen.sim.vm import UNKNOWN_TOOL, WRONG_LENGTH, VirtualMachine, run_text
 
@@ -193,3 +194,79 @@ def test_g53_moves_under_a_frame_are_machine_moves(side_bore: cad.Part) -> None:
     assert free.turns == [({"A": 0.0, "C": 0.0}, {"A": -90.0, "C": -90.0})]
 
 
+
+
+DMIS = """DMISMN/'SIDE BORE',05.0
+UNITS/MM,ANGDEC
+S(D6A0B0)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,50.0000,6.0000
+S(D2A90BM90)=SNSDEF/PROBE,INDEX,POL,90,-90,0,0,-1,30.0000,2.0000
+SNSLCT/S(D6A0B0)
+SNSET/APPRCH,2.0000
+SNSET/RETRCT,2.0000
+SNSET/SEARCH,2.0000
+GOTO/40.0000,30.0000,100.0000
+F(TOP)=FEAT/POINT,CART,40.0000,30.0000,40.0000,0.000000,0.000000,1.000000
+MEAS/POINT,F(TOP),1
+  PTMEAS/CART,40.0000,30.0000,40.0000,0.000000,0.000000,1.000000
+ENDMES
+OUTPUT/FA(TOP)
+GOTO/150.0000,30.0000,100.0000
+SNSLCT/S(D2A90BM90)
+GOTO/150.0000,30.0000,20.0000
+GOTO/70.0000,30.0000,20.0000
+F(WALL)=FEAT/POINT,CART,70.0000,40.0000,20.0000,0.000000,-1.000000,0.000000
+MEAS/POINT,F(WALL),1
+  PTMEAS/CART,70.0000,40.0000,20.0000,0.000000,-1.000000,0.000000
+ENDMES
+OUTPUT/FA(WALL)
+F(BORE)=FEAT/CIRCLE,INNER,CART,70.0000,30.0000,20.0000,1.000000,0.000000,0.000000,20.0000
+MEAS/CIRCLE,F(BORE),4
+  PTMEAS/CART,70.0000,40.0000,20.0000,0.000000,-1.000000,0.000000
+  PTMEAS/CART,70.0000,30.0000,30.0000,0.000000,0.000000,-1.000000
+  PTMEAS/CART,70.0000,20.0000,20.0000,0.000000,1.000000,0.000000
+  PTMEAS/CART,70.0000,30.0000,10.0000,0.000000,0.000000,1.000000
+ENDMES
+OUTPUT/FA(BORE)
+GOTO/150.0000,30.0000,20.0000
+ENDFIL
+"""
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0, 0.0), (0.05, -0.03, 0.02)])
+def test_cmm_two_sensors_and_a_tilted_head_measure_the_side_bore(
+        side_bore: cad.Part, shift: tuple[float, float, float]) -> None:
+    vm = VirtualMachine(PlacedPart.from_model(side_bore, translation=shift), ProbeModel(3.0),
+                        rack=RACK)
+    res = run_text(DMIS, vm, kind="dmis")
+    assert res.alarm is None, res.alarm
+    assert res.touches == 6 and not res.report
+    assert vm.stylus == RACK[1] and vm.stylus_axis == pytest.approx((1.0, 0.0, 0.0))
+    for hit in vm.touches[1:]:  # the 2 mm ball, on the bore
+        assert np.linalg.norm(np.asarray(hit.centre) - hit.point) == pytest.approx(1.0)
+    found = {f.name: f for f in parse_dmis_output(res.output, strict=True).features}
+    dx, dy, dz = shift
+    assert found["TOP"].position == pytest.approx((40.0, 30.0, 40.0 + dz), abs=1e-5)
+    wall = found["WALL"].position
+    assert wall[0] == pytest.approx(70.0, abs=1e-5)
+    axis = (BORE_AXIS_YZ[0] + dy, BORE_AXIS_YZ[1] + dz)  # the planted bore axis
+    assert np.hypot(wall[1] - axis[0], wall[2] - axis[1]) == pytest.approx(
+        BORE_RADIUS, abs=1e-5)  # on the bore surface, compensated with the 2 mm ball
+    assert found["BORE"].position == pytest.approx((70.0, *axis), abs=1e-5)
+    assert found["BORE"].diameter == pytest.approx(20.0, abs=1e-4)
+
+
+def test_cmm_sensor_whose_ball_is_not_in_the_rack_is_an_alarm(side_bore: cad.Part) -> None:
+    vm = VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0), rack=RACK)
+    res = run_text(DMIS.replace("30.0000,2.0000", "30.0000,1.5000"), vm, kind="dmis")
+    assert res.alarm is not None
+    assert res.alarm.startswith(f"{UNKNOWN_TOOL} SENSOR S(D2A90BM90) D1.5: NO STYLUS")
+
+
+def test_head_direction_convention() -> None:
+    from probegen.sim.cmm.sensors import head_direction
+
+    assert head_direction(0.0, 0.0) == pytest.approx((0.0, 0.0, -1.0))
+    assert head_direction(90.0, 0.0) == pytest.approx((0.0, -1.0, 0.0))
+    assert head_direction(90.0, 90.0) == pytest.approx((1.0, 0.0, 0.0))
+    assert head_direction(90.0, -90.0) == pytest.approx((-1.0, 0.0, 0.0))
+    assert head_direction(45.0, 180.0) == pytest.approx((0.0, 0.5 ** 0.5, -(0.5 ** 0.5)))
