@@ -10,6 +10,7 @@ stylus of the rack, the Haas forms, and the alarms.
 from __future__ import annotations
 
 import dataclasses
+
 import numpy as np
 import pytest
 from build123d import Align, Box, Cylinder, Pos, Rot, export_step
@@ -31,7 +32,7 @@ WORK = (0.0, 0.0, -400.0)
 RACK = (Stylus("D6", 6.0, 4.5, 50.0, 20), Stylus("D2", 2.0, 1.4, 30.0, 21))
 AXIS = (1.0, 0.0, 0.0)
 ROTATION = frames.frame_for(AXIS)
-I, J, K = frames.euler_zxz(ROTATION)
+EULER = frames.euler_zxz(ROTATION)
 ORIGIN = (FACE_X, *BORE_AXIS_YZ)
 
 
@@ -67,7 +68,7 @@ def program(*, tool: int = 20, g682: str = "G68.2", g531: str | None = "G53.1",
     return (f"%\nO1000(SIDE BORE)\nG21\nG90 G17 G40 G49 G80 G94 G69\nT{tool} M6\nG54\n"
             f"G0 G43 H{tool} Z100.\nG53 Z0.\n"
             f"{g682} X{ORIGIN[0]:.1f} Y{ORIGIN[1]:.1f} Z{ORIGIN[2]:.1f} "
-            f"I{I:.4f} J{J:.4f} K{K:.4f}\n{tilt}"
+            f"I{EULER[0]:.4f} J{EULER[1]:.4f} K{EULER[2]:.4f}\n{tilt}"
             "G0 X0. Y0. Z30.\nG1 Z-10. F1000.\nPOPEN\n" + "".join(touches) +
             f"G0 Z30.\nG53 Z0.\n{g682} X0. Y0. Z0. I0. J0. K0.\n{tilt}{g69}\n"
             "PCLOS\nM30\n%\n")
@@ -87,7 +88,7 @@ def _orient() -> frames.ir.Orient:
 
 
 def test_skip_positions_are_in_the_frame_and_on_the_bore(side_bore: cad.Part) -> None:
-    assert (I, J, K) == (90.0, 90.0, 0.0)
+    assert EULER == (90.0, 90.0, 0.0)
     vm = machine(side_bore)
     res = run_text(program(), vm, kind="macrob", work_offset=WORK)
     assert res.alarm is None, res.alarm

@@ -22,11 +22,13 @@ could find; this is the convention of this project (docs/sim.md).
   CMM with a head and a rack of styli (a ``Cmm`` whose ``select_sensor`` is set)
   ``SNSLCT/S(x)`` takes the rack's stylus of the sensor's ball and turns the head to
   the sensor's direction (``POL`` angles above; a ``CART`` or ``VEC`` sensor must be
-  vertical); its ball is touched and compensated with from then on.  Another kind (``VIDEO``, ``LASER``, ``INFRED``, ``NONCON`` ...) is
-  read and skipped with a note; selecting it is allowed, and the first ``MEAS`` under it
-  is refused naming the ``SNSDEF`` (:class:`~probegen.sim.cmm.state.ForeignSensor`).
+  vertical); its ball is touched and compensated with from then on.  Another kind
+  (``VIDEO``, ``LASER``, ``INFRED``, ``NONCON`` ...) is read and skipped with a note;
+  selecting it is allowed, and the first ``MEAS`` under it is refused naming the
+  ``SNSDEF`` (:class:`~probegen.sim.cmm.state.ForeignSensor`).
 * ``SNSLCT/S(x)[,...]`` and ``SNSLCT/SA(x)[,...]``: as before, the extra values (a head
-  index) noted.
+  index) noted on a machine tool; on a CMM with a head they are not executed (the head
+  turns to the angles of the sensor's ``SNSDEF``).
 * ``SNSET``: ``APPRCH``, ``RETRCT``, ``SEARCH``, ``DEPTH`` with a distance are executed;
   ``CLRSRF`` (``dist``, ``F(x),dist``, ``OFF``) and vision settings (``VA(x)``,
   ``VL(x)``, ``VF(x)``, ``VW(x)`` with their values) are left out with a note; any other
