@@ -10,6 +10,7 @@ stylus of the rack, the Haas forms, and the alarms.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -271,3 +272,62 @@ def test_head_direction_convention() -> None:
     assert head_direction(90.0, 90.0) == pytest.approx((1.0, 0.0, 0.0))
     assert head_direction(90.0, -90.0) == pytest.approx((-1.0, 0.0, 0.0))
     assert head_direction(45.0, 180.0) == pytest.approx((0.0, 0.5 ** 0.5, -(0.5 ** 0.5)))
+
+
+TOOL_CHANGE = """%
+O1001(TOP FACE)
+G21
+G90 G17 G40 G49 G80 G94 G69
+T{tool} M6
+G54
+G0 G43 H{tool} Z100.
+G0 X40. Y30. Z60.
+POPEN
+G31 Z30. F200.
+DPRNT[PT*X#5061[44]*Y#5062[44]*Z#5063[44]]
+G0 Z100.
+PCLOS
+M30
+%
+"""
+
+
+@pytest.mark.parametrize(("tool", "z"), [(20, "43.0000"), (21, "41.0000")])
+def test_cli_sim_takes_the_stylus_of_the_profile_rack(
+        side_bore: cad.Part, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, tool: int,
+        z: str) -> None:
+    """``probegen sim --machine`` hands the profile's rack to the virtual machine."""
+    from probegen.cli.app import main
+    from probegen.machine import profile as profiles
+
+    real = profiles.load_profile
+    monkeypatch.setattr(profiles, "load_profile",
+                        lambda path: dataclasses.replace(real(path), rack=RACK))
+    nc, log = tmp_path / "top.nc", tmp_path / "top.log"
+    nc.write_text(TOOL_CHANGE.format(tool=tool))
+    part = side_bore.model.path
+    assert main(["sim", str(nc), "--part", part, "--machine",
+                 "samples/machines/vmc-fanuc.toml", "-o", str(log)]) == 0
+    assert log.read_text() == f"%\nPT X40.0000 Y30.0000 Z{z}\n%\n"
+    nc.write_text(TOOL_CHANGE.format(tool=9))
+    assert main(["sim", str(nc), "--part", part, "--machine",
+                 "samples/machines/vmc-fanuc.toml", "-o", str(log)]) != 0
+
+
+@pytest.mark.parametrize(("tool", "z"), [(20, 43.0), (21, 41.0)])
+def test_linuxcnc_tool_change_takes_the_rack_stylus(side_bore: cad.Part, tool: int,
+                                                    z: float) -> None:
+    text = (f"G21 G90\nT{tool} M6\nG43 H{tool}\nG0 X40 Y30 Z60\nG38.2 Z30 F200\n"
+            "#<z> = #5063\n(LOG,Z#<z>)\nM2\n")
+    vm = VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0), rack=RACK)
+    res = run_text(text, vm, kind="ngc")
+    assert res.alarm is None, res.alarm
+    assert vm.touches[0].centre[2] == pytest.approx(z)
+    bad = run_text(text.replace(f"T{tool} M6", "T5 M6").replace(f"H{tool}", "H5"),
+                   VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0),
+                                  rack=RACK), kind="ngc")
+    assert bad.alarm is not None and f"{UNKNOWN_TOOL} TOOL T5 IS NOT IN THE RACK" in bad.alarm
+    wrong = run_text(text.replace(f"H{tool}", "H5"),
+                     VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0),
+                                    rack=RACK), kind="ngc")
+    assert wrong.alarm is not None and f"{WRONG_LENGTH} G43 H5 WITH T{tool}" in wrong.alarm

@@ -67,7 +67,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         run_text,
     )
 
-    part, ball = _sim_part(args)
+    part, ball, rack = _sim_part(args)
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     if isinstance(part, tuple):
@@ -89,7 +89,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     text = _program_text(args.program)
     probes = sum(text.upper().count(word) for word in ("G31", "PTMEAS", "G38."))
     with Bar("simulating", probes, unit="touches") as bar:
-        vm = VirtualMachine(placed, probe, kin, on_touch=bar)
+        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
                           control=args.control or program_control(args.program),
                           feed_override=args.feed_override,
@@ -119,7 +119,9 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     return ExitCode.OK
 
 
-def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
+def _sim_part(args: argparse.Namespace) -> tuple[Any, float, tuple[Any, ...]]:
+    """The part (a loaded model or analytic spheres), the probe's ball radius and the
+    styli a tool change or SNSLCT may take (the profile's rack; none without one)."""
     from probegen import cad
     from probegen.machine.profile import load_profile
 
@@ -128,15 +130,18 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
 
         spec = load_spec(args.spec)
         ball = spec.machine.probe.ball_radius
+        rack = spec.machine.styli() if spec.machine.rack else ()
         if args.part or spec.model is not None:
-            return cad.load_part(args.part or str(spec.model)), ball
+            return cad.load_part(args.part or str(spec.model)), ball, rack
         spheres = [f for f in spec.features if isinstance(f, SphereTest) and f.centre]
         centres = [f.centre for f in spheres]
         radii = [(f.diameter or 0.0) / 2.0 for f in spheres]
-        return (centres, radii), ball
+        return (centres, radii), ball, rack
     if not (args.part and args.machine):
         raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
-    return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
+    profile = load_profile(args.machine)
+    return (cad.load_part(args.part), profile.probe.ball_radius,
+            profile.styli() if profile.rack else ())
 
 
 def _answers(args: argparse.Namespace) -> dict[str, str | int | float] | None:
