@@ -149,7 +149,7 @@ def test_unknown_tool_is_an_alarm_naming_it(side_bore: cad.Part) -> None:
     res = run_text(program(tool=7), machine(side_bore), kind="macrob", work_offset=WORK)
     assert res.alarm is not None
     assert res.alarm.startswith(f"{UNKNOWN_TOOL} TOOL T7 IS NOT IN THE RACK")
-    assert "T21 D2 D2" in res.alarm and res.touches == 0
+    assert "(T20 D6 BALL 6, T21 D2 BALL 2)" in res.alarm and res.touches == 0
     # without a rack the probe never changes (programs before issue 17)
     free = run_text(program(tool=7), machine(side_bore, rack=()), kind="macrob",
                     work_offset=WORK)

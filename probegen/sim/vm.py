@@ -289,8 +289,9 @@ class VirtualMachine:
 
 
 def _rack(rack: tuple[Stylus, ...]) -> str:
-    """The rack in an alarm text: ``T20 D6, T21 D2``."""
-    return ", ".join(f"T{s.tool_number} {s.label} D{s.ball_diameter:g}" for s in rack)
+    """The rack in an alarm text: ``T20 D6 BALL 6, T21 D2 BALL 2`` (tool, label, ball
+    diameter in mm)."""
+    return ", ".join(f"T{s.tool_number} {s.label} BALL {s.ball_diameter:g}" for s in rack)
 
 
 class CmmAdapter:

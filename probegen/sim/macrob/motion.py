@@ -71,9 +71,10 @@ from probegen.sim.macrob.tilt import (
     TOOL_AXIS_CODE,
     FeatureFrame,
     check_probing,
-    machine_to_table,
+    frame_of_block,
+    on_table,
     table_rotation,
-    table_to_machine,
+    turn_table,
     turned,
 )
 from probegen.sim.macrob.variables import (
@@ -216,14 +217,9 @@ class Motion:
         return x, y, z
 
     def table_point(self, point: Point, sense: int) -> Point:
-        """A table-frame point (mm) where the turned table carries it (``sense`` 1), or
-        back (-1); the tool length stays along the machine's Z."""
-        lift = self.tlo * self.unit
-        pivot, matrix = self.settings.table_pivot, self.table_matrix
-        p = [point[0], point[1], point[2] - lift]
-        q = table_to_machine(p, matrix, pivot) if sense > 0 else machine_to_table(
-            p, matrix, pivot)
-        return q[0], q[1], q[2] + lift
+        """A table-frame point where the turned table carries it (1) or back (-1)."""
+        return on_table(point, sense, self.tlo * self.unit, self.table_matrix,
+                        self.settings.table_pivot)
 
     def rotate(self, p: list[float], sense: float) -> list[float]:
         """G68: program → work coordinates (``sense`` 1) or back (-1)."""
@@ -500,28 +496,15 @@ class Motion:
     # -- G68.2 / G53.1 (probegen.sim.macrob.tilt) ----------------------------------------
     def g68_2(self, addr: dict[str, tuple[float, bool]]) -> None:
         """G68.2 X Y Z I J K: the feature coordinate system (the block does not move)."""
-        extra = [a for a in "PQR" if a in addr]
-        if extra:
-            raise alarm(UNSUPPORTED, f"G68.2 WITH {''.join(extra)} (ONLY X Y Z I J K: "
-                        "EULER ANGLES ZXZ)")
-        origin = tuple(self.length(*addr[a]) if a in addr else 0.0 for a in AXIS_LETTERS)
-        euler = tuple(self.angle(*addr[a]) if a in addr else 0.0 for a in "IJK")
         self.rotation = None
-        self.feature = FeatureFrame.of(origin, euler)  # type: ignore[arg-type]
+        self.feature = frame_of_block(addr, self.length, self.angle)
         self.work = self.to_work(self.position)
 
     def tool_axis(self) -> None:
         """G53.1: turn the trunnion table so that the tool axis is the frame's +Z."""
-        if self.feature is None:
-            raise alarm(UNSUPPORTED, "G53.1 WITHOUT G68.2")
-        tilt = getattr(self.machine, "tilt", None)
-        if tilt is None:
-            raise alarm(UNSUPPORTED, "G53.1: THE MACHINE HAS NO TILTING TABLE")
-        start, end = dict(self.table), self.feature.tool_angles()
-        if start != end:
-            swept = max(abs(end[a] - start[a]) for a in end)
-            self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
-            tilt(start, end, self.position)
+        end = turn_table(self.feature, self.machine, self.table, self.position)
+        swept = max(abs(end[a] - self.table[a]) for a in end)
+        self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
         self.table, self.table_matrix = end, table_rotation(end)
         self.work = self.to_work(self.position)
 

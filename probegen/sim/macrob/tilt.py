@@ -29,12 +29,13 @@ Conventions (docs/sim.md, "Tilted working plane"):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
 from probegen.ir.frames import IDENTITY, Rotation, apply, apply_t, from_euler_zxz
 from probegen.sim.alarms import SimAlarm
-from probegen.sim.macrob.base import Machine, Point
+from probegen.sim.macrob.base import UNSUPPORTED, Machine, Point, alarm
 
 NOT_ALONG_FRAME = 9020
 """Alarm: a probing move under G68.2 with the tool axis not along the frame's +Z."""
@@ -111,6 +112,45 @@ def machine_to_table(m: Point | list[float], rotation: Rotation,
     return [r[i] + pivot[i] for i in range(3)]
 
 
+def on_table(point: Point, sense: int, lift: float, rotation: Rotation,
+             pivot: Point) -> Point:
+    """A table-frame point (mm) where the turned table carries it (``sense`` 1), or back
+    (-1); the tool length ``lift`` (mm) stays along the machine's Z."""
+    p = [point[0], point[1], point[2] - lift]
+    q = table_to_machine(p, rotation, pivot) if sense > 0 else machine_to_table(
+        p, rotation, pivot)
+    return q[0], q[1], q[2] + lift
+
+
+def frame_of_block(addr: dict[str, tuple[float, bool]],
+                   length: Callable[[float, bool], float],
+                   angle: Callable[[float, bool], float]) -> FeatureFrame:
+    """The frame of a G68.2 block's words (``length``/``angle`` read a value as
+    written: an integer literal counts input increments)."""
+    extra = [a for a in "PQR" if a in addr]
+    if extra:
+        raise alarm(UNSUPPORTED, f"G68.2 WITH {''.join(extra)} (ONLY X Y Z I J K: EULER "
+                    "ANGLES ZXZ)")
+    x, y, z = (length(*addr[a]) if a in addr else 0.0 for a in "XYZ")
+    i, j, k = (angle(*addr[a]) if a in addr else 0.0 for a in "IJK")
+    return FeatureFrame.of((x, y, z), (i, j, k))
+
+
+def turn_table(frame: FeatureFrame | None, machine: Machine, start: dict[str, float],
+               at: Point) -> dict[str, float]:
+    """G53.1: turn the table (``machine.tilt``) from ``start`` to the frame's angles with
+    the linear axes at ``at``; return the angles."""
+    if frame is None:
+        raise alarm(UNSUPPORTED, "G53.1 WITHOUT G68.2")
+    tilt = getattr(machine, "tilt", None)
+    if tilt is None:
+        raise alarm(UNSUPPORTED, "G53.1: THE MACHINE HAS NO TILTING TABLE")
+    end = frame.tool_angles()
+    if end != start:
+        tilt(dict(start), end, at)
+    return end
+
+
 def tool_axis_in_work(rotation: Rotation) -> tuple[float, float, float]:
     """The tool axis (machine +Z) in table (work) directions under table turn ``rotation``."""
     return apply_t(rotation, (0.0, 0.0, 1.0))
@@ -147,4 +187,5 @@ class TiltMachine(Machine, Protocol):
 
 
 __all__ = ["IDENTITY", "FeatureFrame", "TiltMachine", "along_frame", "check_probing",
-           "machine_to_table", "table_rotation", "table_to_machine", "turned"]
+           "frame_of_block", "machine_to_table", "on_table", "table_rotation",
+           "table_to_machine", "turn_table", "turned"]
