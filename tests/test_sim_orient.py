@@ -331,3 +331,32 @@ def test_linuxcnc_tool_change_takes_the_rack_stylus(side_bore: cad.Part, tool: i
                      VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0),
                                     rack=RACK), kind="ngc")
     assert wrong.alarm is not None and f"{WRONG_LENGTH} G43 H5 WITH T{tool}" in wrong.alarm
+
+
+@pytest.mark.parametrize(("axis", "travel", "expected"), [
+    ("A", None, {"A": -90.0, "C": -90.0}),
+    ("A", (-30.0, 110.0), {"A": 90.0, "C": 90.0}),
+    ("B", None, {"B": -90.0, "C": 0.0}),
+    ("B", (-10.0, 100.0), {"B": 90.0, "C": 180.0}),
+])
+def test_g531_picks_the_trunnion_solution_within_the_travel(
+        side_bore: cad.Part, axis: str, travel: tuple[float, float] | None,
+        expected: dict[str, float]) -> None:
+    """Both solutions bring the frame's Z up: the skip positions in the frame agree."""
+    vm = machine(side_bore)
+    vm.tilt_axis, vm.tilt_range = axis, travel
+    turns: list[dict[str, float]] = []
+    tilt = vm.tilt
+    vm.tilt = lambda start, end, at: (turns.append(end), tilt(start, end, at))  # type: ignore[method-assign]
+    res = run_text(program(), vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is None, res.alarm
+    assert turns[0] == pytest.approx(expected, abs=1e-12)
+    assert skip_points(res.variables)[0] == pytest.approx((7.0, 0.0, -10.0), abs=1e-9)
+
+
+def test_g531_out_of_the_tilt_travel_is_an_alarm(side_bore: cad.Part) -> None:
+    vm = machine(side_bore)
+    vm.tilt_range = (-30.0, 60.0)
+    res = run_text(program(), vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is not None
+    assert res.alarm.startswith("9022 G53.1: NO A WITHIN -30..60 (THE TILT AXIS'S TRAVEL)")

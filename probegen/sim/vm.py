@@ -18,8 +18,9 @@ offset is zero (the controlled point is the ball centre) and the control's G54 o
 ``work_offset`` (zero by default, when machine coordinates are work coordinates).
 
 Trunnion table (G68.2 / G53.1, :mod:`probegen.sim.macrob.tilt`): the control turns the
-table by ``T = Rx(A)·Rz(C)`` about ``pivot`` (machine coordinates) with :meth:`tilt`; the
-part is placed in the table frame (machine coordinates at A0 C0), so the ball at machine
+table by ``T = Rx(A)·Rz(C)`` (or ``Ry(B)·Rz(C)``, ``tilt_axis``) about ``pivot`` (machine
+coordinates) with :meth:`tilt`, within ``tilt_range``; the part is placed in the table
+frame (machine coordinates with the table at zero), so the ball at machine
 position ``m`` (after the linear axes' errors) is at ``pivot + Tᵀ·(m - pivot)`` on the
 part.  The spindle stays vertical: pre-travel is looked up along the machine's axes.
 The turn itself is checked like a rotary move (steps of :data:`ROTARY_STEP`).
@@ -108,8 +109,12 @@ class VirtualMachine:
     """Unit vector from the ball towards the head (a CMM head's orientation), work frame."""
     pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Where the trunnion table's A and C axes meet, machine coordinates, mm."""
-    table: dict[str, float] = field(default_factory=lambda: {"A": 0.0, "C": 0.0})
-    """Trunnion table angles, deg (G53.1)."""
+    tilt_axis: str = "A"
+    """The trunnion's tilt axis: ``"A"`` (about X) or ``"B"`` (about Y)."""
+    tilt_range: tuple[float, float] | None = None
+    """The tilt axis's travel, deg (``[tilt] tilt_range``), or None: not limited."""
+    table: dict[str, float] = field(default_factory=dict)
+    """Trunnion table angles, deg (G53.1); empty: at zero."""
 
     @property
     def ball_radius(self) -> float:
@@ -146,8 +151,8 @@ class VirtualMachine:
         self.stylus, self.stylus_axis = found, axis
 
     def tilt(self, start: dict[str, float], end: dict[str, float], at: Vec3) -> None:
-        """G53.1: turn the trunnion table from ``start`` to ``end`` (deg, ``A``, ``C``)
-        with the linear axes at ``at``; alarm 9100 if the ball meets the part."""
+        """G53.1: turn the trunnion table from ``start`` to ``end`` (deg, ``A`` or ``B``,
+        and ``C``) with the linear axes at ``at``; alarm 9100 if the ball meets the part."""
         if self.rotary:
             raise SimAlarm(UNSUPPORTED_ALARM, "NOT SUPPORTED BY THE VIRTUAL MACHINE (G53.1 ON "
                            "THE B/C HEAD MACHINE: ITS ROTARY AXES ARE B AND C)")
@@ -162,7 +167,7 @@ class VirtualMachine:
 
     def _on_table(self, m: np.ndarray, angles: dict[str, float]) -> np.ndarray:
         """Machine point ``m`` in the table frame with the table at ``angles``."""
-        if angles["A"] == 0.0 and angles["C"] == 0.0:
+        if not any(angles.values()):
             return m
         t = np.asarray(table_rotation(angles))
         p = np.asarray(self.pivot, dtype=np.float64)
@@ -391,7 +396,9 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
     res = run_program(text, vm, source=source, variables=variables, program_dir=program_dir,
                       settings=control_settings(control, home=home,
                                                 feed_override=feed_override,
-                                                table_pivot=vm.pivot))
+                                                table_pivot=vm.pivot,
+                                                tilt_axis=vm.tilt_axis,
+                                                tilt_range=vm.tilt_range))
     alarm = None
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"

@@ -99,8 +99,10 @@ class Settings:
         feed_override: the operator's feed override dial, percent: every G1 and G31 feed
             is multiplied by it / 100, except while ``#3004`` bit 1 (value 2) holds
             feed override at 100 % (the feeds run are ``RunResult.skip_feeds``).
-        table_pivot: where the trunnion table's A and C axes meet, machine coordinates,
-            mm (G53.1 turns the table about it; :mod:`probegen.sim.macrob.tilt`).
+        table_pivot: where the trunnion table's tilt and C axes meet, machine
+            coordinates, mm (G53.1 turns the table about it; :mod:`probegen.sim.macrob.tilt`).
+        tilt_axis: the trunnion's tilt axis, ``"A"`` (about X) or ``"B"`` (about Y).
+        tilt_range: its travel, deg, or None (not limited).
     """
 
     dprnt_blanks: bool = False
@@ -115,6 +117,8 @@ class Settings:
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
     feed_override: float = 100.0
     table_pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tilt_axis: str = "A"
+    tilt_range: tuple[float, float] | None = None
 
 
 CONTROLS: Mapping[str, Settings] = {

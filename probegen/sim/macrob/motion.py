@@ -169,7 +169,7 @@ class Motion:
         """G68 in force: centre X, Y (work coordinates, program unit) and degrees."""
         self.feature: FeatureFrame | None = None
         """G68.2 in force (:mod:`probegen.sim.macrob.tilt`), or None."""
-        self.table: dict[str, float] = {"A": 0.0, "C": 0.0}
+        self.table: dict[str, float] = {settings.tilt_axis: 0.0, "C": 0.0}
         """Trunnion table angles G53.1 turned to, deg."""
         self.table_matrix = IDENTITY
         self.sync()
@@ -502,7 +502,8 @@ class Motion:
 
     def tool_axis(self) -> None:
         """G53.1: turn the trunnion table so that the tool axis is the frame's +Z."""
-        end = turn_table(self.feature, self.machine, self.table, self.position)
+        end = turn_table(self.feature, self.machine, self.table, self.position,
+                         self.settings.tilt_range)
         swept = max(abs(end[a] - self.table[a]) for a in end)
         self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
         self.table, self.table_matrix = end, table_rotation(end)

@@ -1,6 +1,7 @@
 """The tilted working plane of the virtual control: ``G68.2``, ``G53.1``, ``G69`` (Fanuc)
 and ``G268``, ``G253``, ``G269`` (Haas NGC, read as the Fanuc codes), on a trunnion
-table (A tilts the table about machine X, C turns it about the table's own axis).
+table (A tilts the table about machine X, or B about Y; C turns it about the table's own
+axis).
 
 Conventions (docs/sim.md, "Tilted working plane"):
 
@@ -10,10 +11,14 @@ Conventions (docs/sim.md, "Tilted working plane"):
   a program point ``p`` is the work point ``origin + R·p``.  The block does not move.
   ``P`` (other angle forms) and, on Haas, ``Q`` (another Euler order) are alarm 9010.
 * ``G53.1``: the rotary axes turn so that the tool axis (machine +Z, the spindle is
-  vertical) is the frame's +Z: the table turns by ``T = Rx(A)·Rz(C)`` with ``A = -J``,
-  ``C = -I`` (then ``T·R = Rz(K)``), about the table's pivot (``Settings.table_pivot``,
-  machine coordinates).  The linear axes stand still while the table turns; the
-  machine checks the ball's path (:meth:`TiltMachine.tilt`).
+  vertical) is the frame's +Z.  An A/C table (``Settings.tilt_axis`` "A") turns by
+  ``T = Rx(A)·Rz(C)`` with ``A = -J``, ``C = -I`` (then ``T·R = Rz(K)``); a B/C table by
+  ``T = Ry(B)·Rz(C)`` with ``B = -J``, ``C = 90 - I``.  When the tilt axis's travel
+  (``Settings.tilt_range``) does not hold that angle, the other solution (``+J``, C a
+  half turn further); neither: alarm :data:`OUT_OF_TRAVEL`.  C is taken in (-180, 180].
+  The table turns about its pivot (``Settings.table_pivot``, machine coordinates) with
+  the linear axes standing still; the machine checks the ball's path
+  (:meth:`TiltMachine.tilt`).
 * Machine position under a frame: ``m = P + T·(q - P) + (0, 0, tool length)`` with
   ``q = (origin + R·p + work offset) · unit`` (the control knows where its rotary axes
   stand); without a frame (after ``G69``) the table's turn is not in the mapping: the
@@ -43,6 +48,8 @@ TURNED_WITHOUT_FRAME = 9021
 """Alarm: a probing move with the table turned and no feature coordinate system."""
 ALONG = 1e-9
 """Largest difference between the tool axis and the frame's +Z (unit vectors)."""
+OUT_OF_TRAVEL = 9022
+"""Alarm: no angle within the tilt axis's travel brings the tool along the frame."""
 TILT_CODE, TOOL_AXIS_CODE = 682, 531
 """G68.2 and G53.1 in tenths."""
 
@@ -78,25 +85,53 @@ class FeatureFrame:
         o = self.origin
         return list(apply_t(self.rotation, (w[0] - o[0], w[1] - o[1], w[2] - o[2])))
 
-    def tool_angles(self) -> dict[str, float]:
-        """The trunnion angles ``G53.1`` turns to, deg: ``A = -J``, ``C = -I``."""
-        return {"A": _clean(-self.euler[1]), "C": _clean(-self.euler[0])}
+    def tool_angles(self, axis: str = "A",
+                    travel: tuple[float, float] | None = None) -> dict[str, float]:
+        """The trunnion angles ``G53.1`` turns to, deg (module docstring): on an A/C
+        table ``A = -J, C = -I``, on a B/C table ``B = -J, C = 90 - I``; when the tilt
+        axis's ``travel`` does not hold that, the other solution (tilt ``+J``, C a half
+        turn further); neither: alarm :data:`OUT_OF_TRAVEL`."""
+        i, j = self.euler[0], self.euler[1]
+        c0 = -i if axis == "A" else 90.0 - i
+        for tilt, c in ((-j, c0), (j, c0 + 180.0)):
+            if travel is None or travel[0] - 1e-9 <= tilt <= travel[1] + 1e-9:
+                return {axis: _clean(tilt), "C": _clean(_half_turn(c))}
+        raise SimAlarm(OUT_OF_TRAVEL, f"G53.1: NO {axis} WITHIN {travel[0]:g}..{travel[1]:g} "
+                       f"(THE TILT AXIS'S TRAVEL) REACHES THE FRAME I{i:g} J{j:g}")
 
 
 def _clean(x: float) -> float:
     return x + 0.0  # no -0.0
 
 
+def _half_turn(c: float) -> float:
+    """``c`` in (-180, 180]."""
+    c = math.fmod(c, 360.0)
+    return c - 360.0 if c > 180.0 else c + 360.0 if c <= -180.0 else c
+
+
 def table_rotation(angles: dict[str, float]) -> Rotation:
-    """``T = Rx(A)·Rz(C)``: table frame → machine directions (deg)."""
-    a, c = math.radians(angles["A"]), math.radians(angles["C"])
-    ca, sa, cc, sc = math.cos(a), math.sin(a), math.cos(c), math.sin(c)
-    return ((cc, -sc, 0.0), (ca * sc, ca * cc, -sa), (sa * sc, sa * cc, ca))
+    """``T = Rx(A)·Rz(C)`` (an A/C table) or ``Ry(B)·Rz(C)`` (B/C): table frame →
+    machine directions (deg)."""
+    c = math.radians(angles["C"])
+    cc, sc = math.cos(c), math.sin(c)
+    if "A" in angles:
+        a = math.radians(angles["A"])
+        ca, sa = math.cos(a), math.sin(a)
+        return ((cc, -sc, 0.0), (ca * sc, ca * cc, -sa), (sa * sc, sa * cc, ca))
+    b = math.radians(angles["B"])
+    cb, sb = math.cos(b), math.sin(b)
+    return ((cb * cc, -cb * sc, sb), (sc, cc, 0.0), (-sb * cc, sb * sc, cb))
 
 
 def turned(angles: dict[str, float]) -> bool:
-    """Whether the table stands anywhere but A0 C0."""
-    return angles["A"] != 0.0 or angles["C"] != 0.0
+    """Whether the table stands anywhere but at zero."""
+    return any(v != 0.0 for v in angles.values())
+
+
+def describe(angles: dict[str, float]) -> str:
+    """``A-90 C-90``."""
+    return " ".join(f"{k}{v:g}" for k, v in angles.items())
 
 
 def table_to_machine(q: list[float], rotation: Rotation, pivot: Point) -> list[float]:
@@ -137,7 +172,7 @@ def frame_of_block(addr: dict[str, tuple[float, bool]],
 
 
 def turn_table(frame: FeatureFrame | None, machine: Machine, start: dict[str, float],
-               at: Point) -> dict[str, float]:
+               at: Point, travel: tuple[float, float] | None) -> dict[str, float]:
     """G53.1: turn the table (``machine.tilt``) from ``start`` to the frame's angles with
     the linear axes at ``at``; return the angles."""
     if frame is None:
@@ -145,7 +180,7 @@ def turn_table(frame: FeatureFrame | None, machine: Machine, start: dict[str, fl
     tilt = getattr(machine, "tilt", None)
     if tilt is None:
         raise alarm(UNSUPPORTED, "G53.1: THE MACHINE HAS NO TILTING TABLE")
-    end = frame.tool_angles()
+    end = frame.tool_angles(next(a for a in start if a != "C"), travel)
     if end != start:
         tilt(dict(start), end, at)
     return end
@@ -169,11 +204,11 @@ def check_probing(frame: FeatureFrame | None, angles: dict[str, float],
     if frame is not None and not along_frame(frame, rotation):
         i, j, k = frame.euler
         raise SimAlarm(NOT_ALONG_FRAME, f"PROBING UNDER G68.2 I{i:g} J{j:g} K{k:g} WITH THE "
-                       f"TOOL AXIS NOT ALONG THE FRAME'S Z (TABLE A{angles['A']:g} "
-                       f"C{angles['C']:g}): G53.1 MISSING")
+                       f"TOOL AXIS NOT ALONG THE FRAME'S Z (TABLE {describe(angles)}): "
+                       "G53.1 MISSING")
     if frame is None and turned(angles):
-        raise SimAlarm(TURNED_WITHOUT_FRAME, f"PROBING WITH THE TABLE TURNED (A"
-                       f"{angles['A']:g} C{angles['C']:g}) AND NO G68.2: THE SKIP POSITION "
+        raise SimAlarm(TURNED_WITHOUT_FRAME, f"PROBING WITH THE TABLE TURNED "
+                       f"({describe(angles)}) AND NO G68.2: THE SKIP POSITION "
                        "WOULD NOT BE IN THE PART'S COORDINATES")
 
 
