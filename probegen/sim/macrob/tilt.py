@@ -96,7 +96,8 @@ class FeatureFrame:
         for tilt, c in ((-j, c0), (j, c0 + 180.0)):
             if travel is None or travel[0] - 1e-9 <= tilt <= travel[1] + 1e-9:
                 return {axis: _clean(tilt), "C": _clean(_half_turn(c))}
-        raise SimAlarm(OUT_OF_TRAVEL, f"G53.1: NO {axis} WITHIN {travel[0]:g}..{travel[1]:g} "
+        low, high = travel or (0.0, 0.0)
+        raise SimAlarm(OUT_OF_TRAVEL, f"G53.1: NO {axis} WITHIN {low:g}..{high:g} "
                        f"(THE TILT AXIS'S TRAVEL) REACHES THE FRAME I{i:g} J{j:g}")
 
 
