@@ -360,3 +360,22 @@ def test_g531_out_of_the_tilt_travel_is_an_alarm(side_bore: cad.Part) -> None:
     res = run_text(program(), vm, kind="macrob", work_offset=WORK)
     assert res.alarm is not None
     assert res.alarm.startswith("9022 G53.1: NO A WITHIN -30..60 (THE TILT AXIS'S TRAVEL)")
+
+
+def test_cli_sim_runs_a_tilted_program_on_a_trunnion_profile(
+        side_bore: cad.Part, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A profile with ``[tilt]``: machine Z0 is the start height, the work origin and the
+    pivot 500 mm below it; the frame's skip positions are those of the test machine."""
+    from probegen.cli.app import main
+    from probegen.machine import profile as profiles
+
+    real = profiles.load_profile
+    monkeypatch.setattr(profiles, "load_profile", lambda path: dataclasses.replace(
+        real(path), rack=RACK, tilt=profiles.Tilt(tilt_range=(-110.0, 110.0))))
+    nc, log = tmp_path / "side.nc", tmp_path / "side.log"
+    nc.write_text(program(tool=21))
+    assert main(["sim", str(nc), "--part", side_bore.model.path, "--machine",
+                 "samples/machines/vmc-fanuc.toml", "-o", str(log)]) == 0
+    expected = run_text(program(tool=21), machine(side_bore), kind="macrob", work_offset=WORK)
+    assert log.read_text() == expected.output
+    assert "PT X9.0000 Y.0000 Z-10.0000" in expected.output
