@@ -15,6 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from build123d import Align, Box, Cylinder, Pos, Rot, export_step
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen import cad
 from probegen.ir import frames
@@ -22,6 +25,7 @@ from probegen.machine.probe_model import ProbeModel
 from probegen.machine.profile import Stylus, load_profile
 from probegen.results import parse_dmis_output
 from probegen.sim.contact import PlacedPart
+from probegen.sim.macrob.tilt import FeatureFrame
 from probegen.sim.vm import UNKNOWN_TOOL, WRONG_LENGTH, VirtualMachine, run_text
 
 BORE_AXIS_YZ = (30.0, 20.0)
@@ -379,3 +383,44 @@ def test_cli_sim_runs_a_tilted_program_on_a_trunnion_profile(
     expected = run_text(program(tool=21), machine(side_bore), kind="macrob", work_offset=WORK)
     assert log.read_text() == expected.output
     assert "PT X9.0000 Y.0000 Z-10.0000" in expected.output
+
+
+angle = st.floats(-180.0, 180.0, allow_nan=False).map(lambda a: round(a, 3))
+coordinate = st.floats(-200.0, 200.0, allow_nan=False).map(lambda a: round(a, 4))
+
+
+@settings(max_examples=examples(60))
+@given(euler=st.tuples(angle, st.floats(0.0, 180.0).map(lambda a: round(a, 3)), angle),
+       origin=st.tuples(coordinate, coordinate, coordinate),
+       point=st.tuples(coordinate, coordinate, coordinate),
+       axis=st.sampled_from(["A", "B"]))
+def test_g682_round_trip_and_tool_axis(euler: tuple[float, float, float],
+                                       origin: tuple[float, float, float],
+                                       point: tuple[float, float, float], axis: str) -> None:
+    """Any frame: a move to a frame point reads back as that point (#5041-, #5061-), the
+    machine goes to ``pivot + T·(origin + R·p + G54 - pivot)``, and G53.1 brings the tool
+    along the frame's Z on either trunnion (the G31 that follows raises no alarm)."""
+    from probegen.sim.macrob.machine import FreeMachine, Settings, run_program
+    from probegen.sim.macrob.tilt import along_frame, table_rotation
+
+    words = (f"X{origin[0]:.4f} Y{origin[1]:.4f} Z{origin[2]:.4f} I{euler[0]:.3f} "
+             f"J{euler[1]:.3f} K{euler[2]:.3f}")
+    p = f"X{point[0]:.4f} Y{point[1]:.4f} Z{point[2]:.4f}"
+    text = (f"G90 G54\nG68.2 {words}\nG53.1\nG0 {p}\n#101=#5041\n#102=#5042\n#103=#5043\n"
+            f"G31 Z{point[2] - 1.0:.4f} F100.\n#104=#5061\nM30\n")
+    free = FreeMachine(record=True)
+    res = run_program(text, free, variables={5223: -400.0},
+                      settings=Settings(table_pivot=(5.0, -3.0, -400.0), tilt_axis=axis))
+    assert res.alarm is None, res.alarm
+    v = res.variables
+    assert (v[101], v[102], v[103]) == pytest.approx(point, abs=1e-9)
+    assert v[104] == pytest.approx(point[0], abs=1e-9)
+    rotation = frames.from_euler_zxz(*euler)
+    end = free.turns[-1][1] if free.turns else {axis: 0.0, "C": 0.0}
+    frame = FeatureFrame.of(origin, euler)
+    assert along_frame(frame, table_rotation(end))
+    # the machine point of the G0: pivot + T·(origin + R·p + G54 - pivot)
+    work = np.add(origin, frames.apply(rotation, point)) + (0.0, 0.0, -400.0)
+    machine_point = np.add((5.0, -3.0, -400.0), np.asarray(table_rotation(end)) @ (
+        work - (5.0, -3.0, -400.0)))
+    assert free.moves[0][2] == pytest.approx(tuple(machine_point), abs=1e-9)
