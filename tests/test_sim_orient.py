@@ -424,3 +424,17 @@ def test_g682_round_trip_and_tool_axis(euler: tuple[float, float, float],
     machine_point = np.add((5.0, -3.0, -400.0), np.asarray(table_rotation(end)) @ (
         work - (5.0, -3.0, -400.0)))
     assert free.moves[0][2] == pytest.approx(tuple(machine_point), abs=1e-9)
+
+
+def test_a_program_after_one_that_left_the_table_turned_starts_there(
+        side_bore: cad.Part) -> None:
+    """The control reads where its rotary axes stand: a second program that probes
+    without a frame is alarm 9021, one that sets the same frame needs no G53.1 turn."""
+    vm = machine(side_bore)
+    first = program().split("G0 Z30.\nG53 Z0.\n")[0] + "G0 Z30.\nG53 Z0.\nPCLOS\nM30\n%\n"
+    assert run_text(first, vm, kind="macrob", work_offset=WORK).alarm is None
+    assert vm.table == {"A": -90.0, "C": -90.0}
+    again = run_text(program(g531=None).replace("I0. J0. K0.\nG69", "I0. J0. K0.\nG53.1\nG69"),
+                     vm, kind="macrob", work_offset=WORK)
+    assert again.alarm is None, again.alarm
+    assert skip_points(again.variables)[0] == pytest.approx((7.0, 0.0, -10.0), abs=1e-9)

@@ -169,9 +169,11 @@ class Motion:
         """G68 in force: centre X, Y (work coordinates, program unit) and degrees."""
         self.feature: FeatureFrame | None = None
         """G68.2 in force (:mod:`probegen.sim.macrob.tilt`), or None."""
-        self.table: dict[str, float] = {settings.tilt_axis: 0.0, "C": 0.0}
-        """Trunnion table angles G53.1 turned to, deg."""
-        self.table_matrix = IDENTITY
+        self.table: dict[str, float] = dict(getattr(machine, "table", None) or {
+            settings.tilt_axis: 0.0, "C": 0.0})
+        """Trunnion table angles, deg: where the machine's table stands (a program run after
+        one that left it turned starts there), then where G53.1 turned it."""
+        self.table_matrix = table_rotation(self.table) if turned(self.table) else IDENTITY
         self.sync()
 
     # -- coordinates ----------------------------------------------------------------
