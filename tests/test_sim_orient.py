@@ -438,3 +438,14 @@ def test_a_program_after_one_that_left_the_table_turned_starts_there(
                      vm, kind="macrob", work_offset=WORK)
     assert again.alarm is None, again.alarm
     assert skip_points(again.variables)[0] == pytest.approx((7.0, 0.0, -10.0), abs=1e-9)
+
+
+@pytest.mark.parametrize("block", ["G68.2 X0. Y0. Z0. I0. J90. K0. G31 Z-5. F100.",
+                                   "G53.1 G31 Z-5. F100.", "G31 G53.1 Z-5. F100."])
+def test_tilt_codes_with_a_skip_in_one_block_are_an_alarm(block: str) -> None:
+    from probegen.sim.macrob.machine import FreeMachine, run_program
+
+    res = run_program(f"G90 G54\nG68.2 X0. Y0. Z0. I0. J90. K0.\n{block}\nM30\n",
+                      FreeMachine())
+    assert res.alarm is not None and res.alarm.number == 9010
+    assert "IN ONE BLOCK" in res.alarm.message and "G31" in res.alarm.message

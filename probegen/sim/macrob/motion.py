@@ -248,6 +248,12 @@ class Motion:
         if one_shot == DATA:
             self.g10(addr)
             return
+        if TILT_CODE in self.codes or TOOL_AXIS_CODE in self.codes:
+            others = [c for c in self.codes if c in ONE_SHOT and c != TOOL_AXIS_CODE]
+            if TILT_CODE in self.codes and TOOL_AXIS_CODE in self.codes:
+                others.append(TOOL_AXIS_CODE)
+            if others:
+                raise alarm(UNSUPPORTED, f"G68.2/G53.1 WITH {_g(others[0])} IN ONE BLOCK")
         if TILT_CODE in self.codes:
             self.g68_2(addr)
             return
