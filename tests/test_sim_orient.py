@@ -449,3 +449,28 @@ def test_tilt_codes_with_a_skip_in_one_block_are_an_alarm(block: str) -> None:
                       FreeMachine())
     assert res.alarm is not None and res.alarm.number == 9010
     assert "IN ONE BLOCK" in res.alarm.message and "G31" in res.alarm.message
+
+
+@pytest.mark.parametrize(("snsdef", "axis"), [
+    ("INDEX,POL,0,0,0,0,-1,50,2", (0.0, 0.0, 1.0)),
+    ("INDEX,POL,90,90,0,0,1,50,2", (-1.0, 0.0, 0.0)),
+    ("INDEX,POL,90,0,0,0,-1,50,2", (0.0, 1.0, 0.0)),
+    ("INDEX,POL,90,0,1,0,0,50,2", None),            # a horizontal mount
+    ("INDEX,VEC,0,0,1,0,0,-1,40,2", (0.0, 0.0, 1.0)),
+    ("FIXED,CART,0,0,30,0,0,-1,2", (0.0, 0.0, 1.0)),
+    ("FIXED,CART,250,0,-50,0,0,1,2", None),         # a tip offset from the quill
+])
+def test_sensor_axes(side_bore: cad.Part, snsdef: str,
+                     axis: tuple[float, float, float] | None) -> None:
+    from probegen.sim.cmm.interpreter import run_dmis
+    from probegen.sim.vm import CmmAdapter
+
+    vm = VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0), rack=RACK)
+    text = f"DMISMN/'S',05.0\nUNITS/MM,ANGDEC\nS(X)=SNSDEF/PROBE,{snsdef}\nSNSLCT/S(X)\nENDFIL\n"
+    res = run_dmis(text, CmmAdapter(vm), skip_unsupported=True)
+    if axis is None:
+        assert [s.text for s in res.skipped] == ["SNSLCT/S(X)"]
+        assert "stylus direction" in res.skipped[0].reason
+    else:
+        assert not res.skipped and vm.stylus == RACK[1]
+        assert vm.stylus_axis == pytest.approx(axis, abs=1e-15)

@@ -124,7 +124,9 @@ def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> tuple[float, floa
     """The axis from the ball towards the head of a ``SNSDEF/PROBE`` (machine frame), or
     None when the form does not say it in a way the virtual CMM executes."""
     numbers = [float(p) if isinstance(p, (int, float)) else None for p in params]
-    if len(params) > 7 and params[2] == "POL" and None not in numbers[3:8]:
+    if len(params) > 2 and params[2] == "POL":
+        if len(params) < 8 or None in numbers[3:8]:
+            return None
         mount = numbers[5:8]
         if mount[0] == 0.0 and mount[1] == 0.0 and mount[2] != 0.0:
             a, b = (float(v) * state.angle_scale * 180.0 / math.pi  # type: ignore[arg-type]
@@ -132,7 +134,9 @@ def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> tuple[float, floa
             d = head_direction(a, b)
             return (-d[0] + 0.0, -d[1] + 0.0, -d[2] + 0.0)
         return None
-    vectors = [v for v in numbers[3:-1] if v is not None]
+    vectors = numbers[3:9]  # CART: tip offset x,y,z and i,j,k; VEC: two vectors
+    if len(vectors) < 6 or None in vectors:
+        return None
     off_vertical = any(v != 0.0 for k, v in enumerate(vectors) if k % 3 != 2)
     return None if off_vertical else (0.0, 0.0, 1.0)
 
