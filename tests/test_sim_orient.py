@@ -474,3 +474,34 @@ def test_sensor_axes(side_bore: cad.Part, snsdef: str,
     else:
         assert not res.skipped and vm.stylus == RACK[1]
         assert vm.stylus_axis == pytest.approx(axis, abs=1e-15)
+
+
+sensor_word = st.one_of(
+    st.sampled_from(["PROBE", "INDEX", "FIXED", "POL", "CART", "VEC", "VIDEO", "X"]),
+    st.floats(-400.0, 400.0, allow_nan=False).map(lambda v: f"{v:.3f}"),
+    st.integers(-3, 200).map(str))
+
+
+@settings(max_examples=examples(80))
+@given(prefix=st.sampled_from([[], ["PROBE", "INDEX", "POL"], ["PROBE", "FIXED", "CART"],
+                                ["PROBE", "INDEX", "VEC"]]),
+       words=st.lists(sensor_word, max_size=9))
+def test_random_sensors_on_a_cmm_with_a_head_end_in_a_result_or_an_error(
+        prefix: list[str], words: list[str]) -> None:
+    """Any SNSDEF/SNSLCT on the rack CMM: a run result (perhaps an alarm or a skipped
+    statement) or a ProbegenError, never another exception."""
+    from probegen.errors import ProbegenError
+    from probegen.sim.cmm.interpreter import run_dmis
+    from probegen.sim.vm import CmmAdapter
+
+    vm = VirtualMachine(PlacedPart.from_spheres([(0.0, 0.0, 0.0)], [5.0]), ProbeModel(3.0),
+                        rack=RACK)
+    text = (f"DMISMN/'S',05.0\nUNITS/MM,ANGDEC\nS(X)=SNSDEF/{','.join(prefix + words)}\n"
+            "SNSLCT/S(X)\nENDFIL\n")
+    try:
+        res = run_dmis(text, CmmAdapter(vm), skip_unsupported=True)
+    except ProbegenError:
+        return
+    assert res.alarm is None or res.alarm.number == UNKNOWN_TOOL
+    if res.alarm is None and not res.skipped and vm.stylus is not None:
+        assert np.linalg.norm(vm.stylus_axis) == pytest.approx(1.0)
