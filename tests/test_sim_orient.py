@@ -505,3 +505,15 @@ def test_random_sensors_on_a_cmm_with_a_head_end_in_a_result_or_an_error(
     assert res.alarm is None or res.alarm.number == UNKNOWN_TOOL
     if res.alarm is None and not res.skipped and vm.stylus is not None:
         assert np.linalg.norm(vm.stylus_axis) == pytest.approx(1.0)
+
+
+def test_g531_does_not_turn_when_the_tool_is_along_the_frame_already() -> None:
+    from probegen.sim.macrob.machine import FreeMachine, run_program
+
+    free = FreeMachine(record=True)
+    res = run_program("G90 G54\nG68.2 X10. Y0. Z0. I30. J0. K0.\nG53.1\nG0 X1. Y0. Z5.\n"
+                      "#101=#5021\n#102=#5022\nM30\n", free)
+    assert res.alarm is None and free.turns == []
+    # frame X is work (cos 30, sin 30, 0): the frame point (1, 0, 5) is work (10.866, 0.5, 5)
+    assert (res.variables[101], res.variables[102]) == pytest.approx(
+        (10.0 + 3 ** 0.5 / 2, 0.5), abs=1e-12)

@@ -108,7 +108,7 @@ class VirtualMachine:
     stylus_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
     """Unit vector from the ball towards the head (a CMM head's orientation), work frame."""
     pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Where the trunnion table's A and C axes meet, machine coordinates, mm."""
+    """Where the trunnion table's tilt and C axes meet, machine coordinates, mm."""
     tilt_axis: str = "A"
     """The trunnion's tilt axis: ``"A"`` (about X) or ``"B"`` (about Y)."""
     tilt_range: tuple[float, float] | None = None

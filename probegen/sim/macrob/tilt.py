@@ -16,6 +16,8 @@ Conventions (docs/sim.md, "Tilted working plane"):
   ``T = Ry(B)·Rz(C)`` with ``B = -J``, ``C = 90 - I``.  When the tilt axis's travel
   (``Settings.tilt_range``) does not hold that angle, the other solution (``+J``, C a
   half turn further); neither: alarm :data:`OUT_OF_TRAVEL`.  C is taken in (-180, 180].
+  When the tool is along the frame's +Z already (a frame turned about Z only, or the
+  table left there), nothing turns.
   The table turns about its pivot (``Settings.table_pivot``, machine coordinates) with
   the linear axes standing still; the machine checks the ball's path
   (:meth:`TiltMachine.tilt`).
@@ -181,6 +183,8 @@ def turn_table(frame: FeatureFrame | None, machine: Machine, start: dict[str, fl
     tilt = getattr(machine, "tilt", None)
     if tilt is None:
         raise alarm(UNSUPPORTED, "G53.1: THE MACHINE HAS NO TILTING TABLE")
+    if along_frame(frame, table_rotation(start)):
+        return dict(start)  # the tool is along the frame's Z already: nothing turns
     end = frame.tool_angles(next(a for a in start if a != "C"), travel)
     if end != start:
         tilt(dict(start), end, at)
