@@ -9,7 +9,8 @@ Conventions (docs/sim.md, "Tilted working plane"):
   coordinates (absolute, even under G91; an omitted word is 0) and Euler angles
   ``R = Rz(I)·Rx(J)·Rz(K)`` (deg), exactly :func:`probegen.ir.frames.from_euler_zxz`:
   a program point ``p`` is the work point ``origin + R·p``.  The block does not move.
-  ``P`` (other angle forms) and, on Haas, ``Q`` (another Euler order) are alarm 9010.
+  ``P``, ``Q`` or ``R`` words (other angle forms; Haas's ``Q``: another Euler order)
+  are alarm 9010.  G68.2 and G53.1 each stand in a block of their own (alarm 9010).
 * ``G53.1``: the rotary axes turn so that the tool axis (machine +Z, the spindle is
   vertical) is the frame's +Z.  An A/C table (``Settings.tilt_axis`` "A") turns by
   ``T = Rx(A)·Rz(C)`` with ``A = -J``, ``C = -I`` (then ``T·R = Rz(K)``); a B/C table by
