@@ -517,3 +517,24 @@ def test_g531_does_not_turn_when_the_tool_is_along_the_frame_already() -> None:
     # frame X is work (cos 30, sin 30, 0): the frame point (1, 0, 5) is work (10.866, 0.5, 5)
     assert (res.variables[101], res.variables[102]) == pytest.approx(
         (10.0 + 3 ** 0.5 / 2, 0.5), abs=1e-12)
+
+
+@pytest.mark.parametrize(("a", "b", "alarm"), [
+    ("90", "-90", None), ("105", "172.5", None), ("112.5", "0", "A112.5 B0"),
+    ("10", "0", "A10 B0"), ("90", "-187.5", "A90 B-187.5")])
+def test_cmm_head_indexes_only_its_angles(side_bore: cad.Part, a: str, b: str,
+                                          alarm: str | None) -> None:
+    from probegen.machine.profile import Head
+    from probegen.sim.vm import HEAD_INDEX
+
+    vm = VirtualMachine(PlacedPart.from_model(side_bore), ProbeModel(3.0), rack=RACK,
+                        head=Head())
+    text = (f"DMISMN/'S',05.0\nUNITS/MM,ANGDEC\nS(X)=SNSDEF/PROBE,INDEX,POL,{a},{b},0,0,-1,"
+            "30,2\nSNSLCT/S(X)\nENDFIL\n")
+    res = run_text(text, vm, kind="dmis")
+    if alarm is None:
+        assert res.alarm is None and vm.stylus == RACK[1]
+    else:
+        assert res.alarm is not None
+        assert res.alarm.startswith(f"{HEAD_INDEX} SENSOR S(X) {alarm}: NOT AN INDEX OF THE "
+                                    "HEAD (A 0..105, B -180..180, STEP 7.5)")

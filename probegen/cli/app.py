@@ -74,8 +74,9 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     # origin and the table pivot HOME below it (docs/sim.md)
     tilt = profile.tilt if program_kind(args.program) != "dmis" else None
     work = (0.0, 0.0, -HOME[2]) if tilt is not None else (0.0, 0.0, 0.0)
-    trunnion = {} if tilt is None else {"pivot": work, "tilt_axis": tilt.tilt_axis,
-                                        "tilt_range": tilt.tilt_range}
+    options = {} if tilt is None else {"pivot": work, "tilt_axis": tilt.tilt_axis,
+                                       "tilt_range": tilt.tilt_range}
+    options["head"] = profile.head  # a CMM's indexable head: SNSDEF angles on its indices
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     if isinstance(part, tuple):
@@ -97,7 +98,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     text = _program_text(args.program)
     probes = sum(text.upper().count(word) for word in ("G31", "PTMEAS", "G38."))
     with Bar("simulating", probes, unit="touches") as bar:
-        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack, **trunnion)
+        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack, **options)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
                           work_offset=work, home=(HOME[0], HOME[1], HOME[2] + work[2]),
                           control=args.control or program_control(args.program),

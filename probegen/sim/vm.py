@@ -58,7 +58,7 @@ import numpy as np
 from probegen.ir.frames import frame_for
 from probegen.machine.kinematics import Machine, Topology
 from probegen.machine.probe_model import ProbeModel, tilted_probe_frame
-from probegen.machine.profile import Stylus
+from probegen.machine.profile import Head, Stylus
 from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import ContactHit, PlacedPart
 from probegen.sim.macrob.tilt import table_rotation
@@ -75,6 +75,8 @@ UNKNOWN_TOOL = 9012
 """Alarm number of a tool change to a tool (or a DMIS sensor's ball) not in the rack."""
 WRONG_LENGTH = 9013
 """Alarm number of a G43 H that is not the tool in the spindle (with a rack)."""
+HEAD_INDEX = 9014
+"""Alarm number of a DMIS sensor whose head angles the CMM's head cannot index."""
 SENSOR_BALL = 1e-4
 """Largest difference, mm, between a DMIS sensor's ball diameter and a rack stylus's."""
 ROTARY_STEP = 0.25
@@ -109,6 +111,8 @@ class VirtualMachine:
     """Unit vector from the ball towards the head (a CMM head's orientation), work frame."""
     pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Where the trunnion table's tilt and C axes meet, machine coordinates, mm."""
+    head: Head | None = None
+    """A CMM's indexable head (``[head]``): SNSDEF angles must be its indices; None: any."""
     tilt_axis: str = "A"
     """The trunnion's tilt axis: ``"A"`` (about X) or ``"B"`` (about Y)."""
     tilt_range: tuple[float, float] | None = None
@@ -137,17 +141,23 @@ class VirtualMachine:
             raise SimAlarm(WRONG_LENGTH, f"G43 H{h} WITH T{tool} IN THE SPINDLE: THE LENGTH "
                            "OFFSET OF ANOTHER TOOL")
 
-    def select_sensor(self, label: str, ball_radius: float,
-                      axis: tuple[float, float, float]) -> None:
+    def select_sensor(self, label: str, ball_radius: float, axis: tuple[float, float, float],
+                      angles: tuple[float, float] | None = None) -> None:
         """A DMIS ``SNSLCT``: take the rack's stylus of ``ball_radius`` (mm) and turn the
         head so that the stylus points along ``-axis`` (``axis``: unit, from the ball
-        towards the head, work frame).  Alarm :data:`UNKNOWN_TOOL` when no stylus of the
-        rack has that ball."""
+        towards the head, work frame) at head ``angles`` (A, B, deg).  Alarm
+        :data:`UNKNOWN_TOOL` when no stylus of the rack has that ball, :data:`HEAD_INDEX`
+        when the angles are outside the head's ranges or between its index steps."""
         found = next((s for s in self.rack
                       if abs(s.ball_radius - ball_radius) <= SENSOR_BALL / 2.0), None)
         if found is None:
             raise SimAlarm(UNKNOWN_TOOL, f"SENSOR S({label}) D{2 * ball_radius:g}: NO STYLUS "
                            f"OF THIS BALL IN THE RACK ({_rack(self.rack)})")
+        if angles is not None and self.head is not None and not _indexed(self.head, angles):
+            h = self.head
+            raise SimAlarm(HEAD_INDEX, f"SENSOR S({label}) A{angles[0]:g} B{angles[1]:g}: NOT "
+                           f"AN INDEX OF THE HEAD (A {h.a[0]:g}..{h.a[1]:g}, B {h.b[0]:g}.."
+                           f"{h.b[1]:g}, STEP {h.step:g})")
         self.stylus, self.stylus_axis = found, axis
 
     def tilt(self, start: dict[str, float], end: dict[str, float], at: Vec3) -> None:
@@ -293,6 +303,17 @@ class VirtualMachine:
         return self.skip(start, (float(end[0]), float(end[1]), float(end[2])), 0.0)
 
 
+def _indexed(head: Head, angles: tuple[float, float]) -> bool:
+    """Whether the head indexes to ``angles`` (within its ranges, on its steps; 1e-6 deg)."""
+    tol = 1e-6
+    for value, (low, high) in zip(angles, (head.a, head.b), strict=True):
+        steps = value / head.step
+        if not (low - tol <= value <= high + tol and abs(steps - round(steps)) * head.step
+                <= tol):
+            return False
+    return True
+
+
 def _rack(rack: tuple[Stylus, ...]) -> str:
     """The rack in an alarm text: ``T20 D6 BALL 6, T21 D2 BALL 2`` (tool, label, ball
     diameter in mm)."""
@@ -305,7 +326,7 @@ class CmmAdapter:
 
     def __init__(self, vm: VirtualMachine) -> None:
         self.vm = vm
-        self.select_sensor: Callable[[str, float, Vec3], None] | None = (
+        self.select_sensor: Callable[..., None] | None = (
             vm.select_sensor if vm.rack else None)
 
     @property

@@ -112,6 +112,11 @@ def do_snsdef(state: VmState, st: Statement) -> None:
                             "stylus is fixed and touches the same ball centres"))
 
 
+Axis = tuple[tuple[float, float, float], tuple[float, float] | None]
+"""A sensor's stylus axis (ball towards head, unit, machine frame) and its head angles
+``(A, B)`` in degrees (None for a fixed vertical sensor)."""
+
+
 def head_direction(a: float, b: float) -> tuple[float, float, float]:
     """The stylus direction (head to ball, unit) at head angles ``A``, ``B`` (deg), see
     the module docstring."""
@@ -120,9 +125,10 @@ def head_direction(a: float, b: float) -> tuple[float, float, float]:
     return (sa * sb + 0.0, -sa * cb + 0.0, -ca + 0.0)
 
 
-def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> tuple[float, float, float] | None:
-    """The axis from the ball towards the head of a ``SNSDEF/PROBE`` (machine frame), or
-    None when the form does not say it in a way the virtual CMM executes."""
+def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> Axis | None:
+    """The axis from the ball towards the head of a ``SNSDEF/PROBE`` (machine frame) and
+    the head angles ``(A, B)`` (deg) of a ``POL`` form, or None when the form does not
+    say it in a way the virtual CMM executes."""
     numbers = [float(p) if isinstance(p, (int, float)) else None for p in params]
     if len(params) > 2 and params[2] == "POL":
         if len(params) < 8 or None in numbers[3:8]:
@@ -132,13 +138,13 @@ def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> tuple[float, floa
             a, b = (float(v) * state.angle_scale * 180.0 / math.pi  # type: ignore[arg-type]
                     for v in numbers[3:5])
             d = head_direction(a, b)
-            return (-d[0] + 0.0, -d[1] + 0.0, -d[2] + 0.0)
+            return (-d[0] + 0.0, -d[1] + 0.0, -d[2] + 0.0), (a, b)
         return None
     vectors = numbers[3:9]  # CART: tip offset x,y,z and i,j,k; VEC: two vectors
     if len(vectors) < 6 or None in vectors:
         return None
     off_vertical = any(v != 0.0 for k, v in enumerate(vectors) if k % 3 != 2)
-    return None if off_vertical else (0.0, 0.0, 1.0)
+    return None if off_vertical else ((0.0, 0.0, 1.0), None)
 
 
 def _head(state: VmState) -> object | None:
@@ -191,7 +197,7 @@ def do_snslct(state: VmState, st: Statement) -> None:
             raise NotExecutable(f"S({name}): the stylus direction of this SNSDEF form (a "
                                 "CART or VEC sensor that is not vertical, or a POL sensor "
                                 "with a mount vector that is not vertical)")
-        select(name, diameter / 2.0, axis)  # type: ignore[operator]
+        select(name, diameter / 2.0, *axis)  # type: ignore[operator]
         state.radius = diameter / 2.0
         return
     if abs(diameter / 2.0 - machine) > SENSOR_MATCH:
