@@ -60,6 +60,7 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     from probegen.sim.contact import PlacedPart
     from probegen.sim.serial_play import PtyLink
     from probegen.sim.vm import (
+        HOME,
         VirtualMachine,
         control_state,
         program_control,
@@ -67,7 +68,15 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
         run_text,
     )
 
-    part, ball = _sim_part(args)
+    part, profile = _sim_part(args)
+    ball, rack = profile.probe.ball_radius, profile.styli() if profile.rack else ()
+    # a trunnion (a profile with [tilt]): machine Z0 (G53 Z0) at the start height, the work
+    # origin and the table pivot HOME below it (docs/sim.md)
+    tilt = profile.tilt if program_kind(args.program) != "dmis" else None
+    work = (0.0, 0.0, -HOME[2]) if tilt is not None else (0.0, 0.0, 0.0)
+    options = {} if tilt is None else {"pivot": work, "tilt_axis": tilt.tilt_axis,
+                                       "tilt_range": tilt.tilt_range}
+    options["head"] = profile.head  # a CMM's indexable head: SNSDEF angles on its indices
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     if isinstance(part, tuple):
@@ -75,13 +84,13 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
             raise ProbegenError(f"sim --form {args.form}: expected a part model (--part, or "
                                 f"a spec with [part] model), found analytic spheres only")
         placed = PlacedPart.from_spheres(part[0], part[1], rotation=rotation,
-                                         translation=args.offset)
+                                         translation=np.add(args.offset, work))
     else:
         from probegen.sim.form import load_forms
 
         forms = load_forms(args.form) if args.form else ()
-        placed = PlacedPart.from_model(part, rotation=rotation, translation=args.offset,
-                                       forms=forms)
+        placed = PlacedPart.from_model(part, rotation=rotation,
+                                       translation=np.add(args.offset, work), forms=forms)
     probe = probe_from_args(args, ball)
     kin = load_machine(args.errors) if args.errors else None
     from probegen.cli.progress import Bar
@@ -89,8 +98,9 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     text = _program_text(args.program)
     probes = sum(text.upper().count(word) for word in ("G31", "PTMEAS", "G38."))
     with Bar("simulating", probes, unit="touches") as bar:
-        vm = VirtualMachine(placed, probe, kin, on_touch=bar)
+        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack, **options)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
+                          work_offset=work, home=(HOME[0], HOME[1], HOME[2] + work[2]),
                           control=args.control or program_control(args.program),
                           feed_override=args.feed_override,
                           program_dir=Path(args.library or Path(args.program).parent),
@@ -119,7 +129,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     return ExitCode.OK
 
 
-def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
+def _sim_part(args: argparse.Namespace) -> tuple[Any, Any]:
+    """The part (a loaded model or analytic spheres) and the machine profile."""
     from probegen import cad
     from probegen.machine.profile import load_profile
 
@@ -127,16 +138,15 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, float]:
         from probegen.spec.model import SphereTest, load_spec
 
         spec = load_spec(args.spec)
-        ball = spec.machine.probe.ball_radius
         if args.part or spec.model is not None:
-            return cad.load_part(args.part or str(spec.model)), ball
+            return cad.load_part(args.part or str(spec.model)), spec.machine
         spheres = [f for f in spec.features if isinstance(f, SphereTest) and f.centre]
         centres = [f.centre for f in spheres]
         radii = [(f.diameter or 0.0) / 2.0 for f in spheres]
-        return (centres, radii), ball
+        return (centres, radii), spec.machine
     if not (args.part and args.machine):
         raise ProbegenError("sim: expected --spec, or --part and --machine, found neither")
-    return cad.load_part(args.part), load_profile(args.machine).probe.ball_radius
+    return cad.load_part(args.part), load_profile(args.machine)
 
 
 def _answers(args: argparse.Namespace) -> dict[str, str | int | float] | None:

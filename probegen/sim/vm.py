@@ -17,6 +17,23 @@ Frames: the part is placed in machine coordinates (``PlacedPart``).  The probe's
 offset is zero (the controlled point is the ball centre) and the control's G54 offset is
 ``work_offset`` (zero by default, when machine coordinates are work coordinates).
 
+Trunnion table (G68.2 / G53.1, :mod:`probegen.sim.macrob.tilt`): the control turns the
+table by ``T = Rx(A)·Rz(C)`` (or ``Ry(B)·Rz(C)``, ``tilt_axis``) about ``pivot`` (machine
+coordinates) with :meth:`tilt`, within ``tilt_range``; the part is placed in the table
+frame (machine coordinates with the table at zero), so the ball at machine
+position ``m`` (after the linear axes' errors) is at ``pivot + Tᵀ·(m - pivot)`` on the
+part.  The spindle stays vertical: pre-travel is looked up along the machine's axes.
+The turn itself is checked like a rotary move (steps of :data:`ROTARY_STEP`).
+
+Styli (issue 17): ``rack`` holds the styli a tool change may take
+(``MachineProfile.styli()``).  ``T.. M6`` takes the stylus with that tool number
+(:meth:`select_tool`; one not in the rack is alarm :data:`UNKNOWN_TOOL` naming it) and
+its ball touches from then on; ``G43 H..`` must name the tool in the spindle
+(:meth:`check_length`, alarm :data:`WRONG_LENGTH`).  A DMIS ``SNSLCT`` takes the rack's
+stylus of the sensor's ball and turns it to the sensor's direction
+(:meth:`select_sensor`).  With an empty rack (the default) the probe never changes, as
+before.
+
 Rotary axes (a ``five-axis-bc`` kinematics, method M4's machine): the part sits on the
 C table, placed in the table frame (machine coordinates at ``C = 0``; see
 ``machine.kinematics``), so it turns with C; B tilts the head.  X, Y, Z command the
@@ -38,10 +55,13 @@ from pathlib import Path
 
 import numpy as np
 
+from probegen.ir.frames import frame_for
 from probegen.machine.kinematics import Machine, Topology
 from probegen.machine.probe_model import ProbeModel, tilted_probe_frame
+from probegen.machine.profile import Head, Stylus
 from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import ContactHit, PlacedPart
+from probegen.sim.macrob.tilt import table_rotation
 
 Vec3 = tuple[float, float, float]
 
@@ -51,6 +71,14 @@ LEAVE_MARGIN = 1e-6
 """How clear (mm) a ball backing away from a touch must be before contact counts again."""
 UNSUPPORTED_ALARM = 9010
 """Alarm number of a command the virtual machine does not model."""
+UNKNOWN_TOOL = 9012
+"""Alarm number of a tool change to a tool (or a DMIS sensor's ball) not in the rack."""
+WRONG_LENGTH = 9013
+"""Alarm number of a G43 H that is not the tool in the spindle (with a rack)."""
+HEAD_INDEX = 9014
+"""Alarm number of a DMIS sensor whose head angles the CMM's head cannot index."""
+SENSOR_BALL = 1e-4
+"""Largest difference, mm, between a DMIS sensor's ball diameter and a rack stylus's."""
 ROTARY_STEP = 0.25
 """Largest rotary step (deg) between the points a rotary move is checked at; the chord
 misses the ball's arc by at most ``L·(1 − cos(step/2))``: 0.7 µm at L = 300 mm."""
@@ -75,11 +103,91 @@ class VirtualMachine:
     on_touch: Callable[[int], None] | None = None
     angles: dict[str, float] = field(default_factory=lambda: {"B": 0.0, "C": 0.0})
     """Machine angles of the rotary axes, deg."""
+    rack: tuple[Stylus, ...] = ()
+    """The styli a tool change or a DMIS SNSLCT may take; empty: the probe never changes."""
+    stylus: Stylus | None = None
+    """The stylus taken from the rack, or None: ``probe``'s ball."""
+    stylus_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    """Unit vector from the ball towards the head (a CMM head's orientation), work frame."""
+    pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Where the trunnion table's tilt and C axes meet, machine coordinates, mm."""
+    head: Head | None = None
+    """A CMM's indexable head (``[head]``): SNSDEF angles must be its indices; None: any."""
+    tilt_axis: str = "A"
+    """The trunnion's tilt axis: ``"A"`` (about X) or ``"B"`` (about Y)."""
+    tilt_range: tuple[float, float] | None = None
+    """The tilt axis's travel, deg (``[tilt] tilt_range``), or None: not limited."""
+    table: dict[str, float] = field(default_factory=dict)
+    """Trunnion table angles, deg (G53.1); empty: at zero."""
 
     @property
     def ball_radius(self) -> float:
         """The physical stylus ball radius, mm."""
-        return self.probe.ball_radius
+        return self.stylus.ball_radius if self.stylus is not None else self.probe.ball_radius
+
+    def select_tool(self, number: int) -> None:
+        """``T.. M6``: take the rack's stylus with tool number ``number``."""
+        if not self.rack:
+            return
+        found = next((s for s in self.rack if s.tool_number == number), None)
+        if found is None:
+            raise SimAlarm(UNKNOWN_TOOL, f"TOOL T{number} IS NOT IN THE RACK ({_rack(self.rack)})")
+        self.stylus = found
+
+    def check_length(self, h: int, tool: int) -> None:
+        """``G43 H``: with a rack, ``h`` must be the tool in the spindle (a wrong length
+        would put the ball off by the difference of the two styli)."""
+        if self.rack and tool and h != tool:
+            raise SimAlarm(WRONG_LENGTH, f"G43 H{h} WITH T{tool} IN THE SPINDLE: THE LENGTH "
+                           "OFFSET OF ANOTHER TOOL")
+
+    def select_sensor(self, label: str, ball_radius: float, axis: tuple[float, float, float],
+                      angles: tuple[float, float] | None = None) -> None:
+        """A DMIS ``SNSLCT``: take the rack's stylus of ``ball_radius`` (mm) and turn the
+        head so that the stylus points along ``-axis`` (``axis``: unit, from the ball
+        towards the head, work frame) at head ``angles`` (A, B, deg).  Alarm
+        :data:`UNKNOWN_TOOL` when no stylus of the rack has that ball, :data:`HEAD_INDEX`
+        when the angles are outside the head's ranges or between its index steps."""
+        found = next((s for s in self.rack
+                      if abs(s.ball_radius - ball_radius) <= SENSOR_BALL / 2.0), None)
+        if found is None:
+            raise SimAlarm(UNKNOWN_TOOL, f"SENSOR S({label}) D{2 * ball_radius:g}: NO STYLUS "
+                           f"OF THIS BALL IN THE RACK ({_rack(self.rack)})")
+        if angles is not None and self.head is not None and not _indexed(self.head, angles):
+            h = self.head
+            raise SimAlarm(HEAD_INDEX, f"SENSOR S({label}) A{angles[0]:g} B{angles[1]:g}: NOT "
+                           f"AN INDEX OF THE HEAD (A {h.a[0]:g}..{h.a[1]:g}, B {h.b[0]:g}.."
+                           f"{h.b[1]:g}, STEP {h.step:g})")
+        self.stylus, self.stylus_axis = found, axis
+
+    def tilt(self, start: dict[str, float], end: dict[str, float], at: Vec3) -> None:
+        """G53.1: turn the trunnion table from ``start`` to ``end`` (deg, ``A`` or ``B``,
+        and ``C``) with the linear axes at ``at``; alarm 9100 if the ball meets the part."""
+        if self.rotary:
+            raise SimAlarm(UNSUPPORTED_ALARM, "NOT SUPPORTED BY THE VIRTUAL MACHINE (G53.1 ON "
+                           "THE B/C HEAD MACHINE: ITS ROTARY AXES ARE B AND C)")
+        swept = max(abs(end[a] - start[a]) for a in end)
+        steps = max(1, int(np.ceil(swept / ROTARY_STEP)))
+        ball = self._linear(np.asarray(at, dtype=np.float64))
+        path = [self._on_table(ball, {a: start[a] + k / steps * (end[a] - start[a])
+                                      for a in end}) for k in range(steps + 1)]
+        for previous, current in zip(path[:-1], path[1:], strict=True):
+            self._clear_actual(previous, current, "TABLE TILT")
+        self.table = dict(end)
+
+    def _on_table(self, m: np.ndarray, angles: dict[str, float]) -> np.ndarray:
+        """Machine point ``m`` in the table frame with the table at ``angles``."""
+        if not any(angles.values()):
+            return m
+        t = np.asarray(table_rotation(angles))
+        p = np.asarray(self.pivot, dtype=np.float64)
+        return np.asarray(p + (m - p) @ t)
+
+    def _linear(self, q: np.ndarray) -> np.ndarray:
+        """Where the ball really is (machine frame) at linear axes ``q``, no rotary axes."""
+        if self.kinematics is None:
+            return q
+        return np.asarray(self.kinematics.actual_tool_point(q, np.zeros(3)))
 
     @property
     def rotary(self) -> bool:
@@ -90,10 +198,9 @@ class VirtualMachine:
         """Where the ball centre really is (table frame) when the linear axes are
         commanded to ``p`` (the rotary axes where they are)."""
         q = np.asarray(p, dtype=np.float64)
-        if self.kinematics is None:
-            return q
         if not self.rotary:
-            return np.asarray(self.kinematics.actual_tool_point(q, np.zeros(3)))
+            return self._on_table(self._linear(q), self.table)
+        assert self.kinematics is not None
         length = self.kinematics.pivot_length
         axes = [q[0], q[1], q[2] + length, np.radians(self.angles["B"]),
                 np.radians(self.angles["C"])]
@@ -119,10 +226,13 @@ class VirtualMachine:
         self.angles = {"B": b1, "C": c1}
 
     def probe_frame(self, direction: np.ndarray) -> np.ndarray:
-        """A machine-frame direction in the probe frame (its z tilts with B)."""
-        if not self.rotary:
+        """A machine-frame direction in the probe frame (its z tilts with B, or is the
+        CMM head's stylus axis)."""
+        if self.rotary:
+            return tilted_probe_frame(direction, float(self.angles["B"]))
+        if self.stylus_axis == (0.0, 0.0, 1.0):
             return direction
-        return tilted_probe_frame(direction, float(self.angles["B"]))
+        return np.asarray(direction @ np.asarray(frame_for(self.stylus_axis)))
 
     def _clear(self, start: Vec3, end: Vec3, what: str) -> None:
         self._clear_actual(self.actual(start), self.actual(end), what)
@@ -193,11 +303,31 @@ class VirtualMachine:
         return self.skip(start, (float(end[0]), float(end[1]), float(end[2])), 0.0)
 
 
+def _indexed(head: Head, angles: tuple[float, float]) -> bool:
+    """Whether the head indexes to ``angles`` (within its ranges, on its steps; 1e-6 deg)."""
+    tol = 1e-6
+    for value, (low, high) in zip(angles, (head.a, head.b), strict=True):
+        steps = value / head.step
+        if not (low - tol <= value <= high + tol and abs(steps - round(steps)) * head.step
+                <= tol):
+            return False
+    return True
+
+
+def _rack(rack: tuple[Stylus, ...]) -> str:
+    """The rack in an alarm text: ``T20 D6 BALL 6, T21 D2 BALL 2`` (tool, label, ball
+    diameter in mm)."""
+    return ", ".join(f"T{s.tool_number} {s.label} BALL {s.ball_diameter:g}" for s in rack)
+
+
 class CmmAdapter:
-    """The ``Cmm`` face of a ``VirtualMachine`` for the DMIS interpreter."""
+    """The ``Cmm`` face of a ``VirtualMachine`` for the DMIS interpreter (a VM with a rack
+    is a CMM with an indexable head and those styli: it has ``select_sensor``)."""
 
     def __init__(self, vm: VirtualMachine) -> None:
         self.vm = vm
+        self.select_sensor: Callable[..., None] | None = (
+            vm.select_sensor if vm.rack else None)
 
     @property
     def ball_radius(self) -> float:
@@ -286,7 +416,10 @@ def run_text(text: str, vm: VirtualMachine, *, kind: str, source: str = "<progra
                  11000 + tool: 0.0, 10000 + tool: 0.0}
     res = run_program(text, vm, source=source, variables=variables, program_dir=program_dir,
                       settings=control_settings(control, home=home,
-                                                feed_override=feed_override))
+                                                feed_override=feed_override,
+                                                table_pivot=vm.pivot,
+                                                tilt_axis=vm.tilt_axis,
+                                                tilt_range=vm.tilt_range))
     alarm = None
     if res.alarm is not None:
         alarm = f"{res.alarm.number} {res.alarm.message} (line {res.alarm.line})"

@@ -1,14 +1,34 @@
 """Sensors, probing settings and the statements CMM software writes for itself.
 
+Head angles (issue 17; the DMIS dialect writes the same): ``SNSDEF/PROBE,INDEX,POL,A,B,
+i,j,k,length,diameter`` with the mount vector ``i,j,k`` vertical (``0,0,-1`` as
+probegen writes it, or ``0,0,1``).  ``A`` tilts the stylus from straight down (A0)
+towards the horizontal (A90) and beyond; ``B`` turns it about the vertical,
+counter-clockwise seen from above (right hand about +Z).  The stylus direction, from
+the head to the ball, machine coordinates::
+
+    d(A, B) = Rz(B) · (0, -sin A, -cos A) = (sin A sin B, -sin A cos B, -cos A)
+
+so A90B0 points the ball to -Y, A90B90 to +X, A90B-90 to -X; the probe's approach axis
+(frame +Z of ``ir.Orient``, from the ball towards the head) is ``-d``.  DMIS 5.3 names
+the two angles (tilt, then rotation) without fixing which way B turns in the text we
+could find; this is the convention of this project (docs/sim.md).
+
 * ``S(x)=SNSDEF/PROBE,FIXED|INDEX,CART|POL|VEC,...,diameter``: a touch probe whose ball
   diameter is the last value, whatever the form (a fixed probe, an indexed head by its
   tilt and rotation, a vector); a diameter of 0 stands for the machine's calibrated
-  stylus.  An indexed form is noted: the machine tool's stylus is fixed and touches the
-  same ball centres.  Another kind (``VIDEO``, ``LASER``, ``INFRED``, ``NONCON`` ...) is
-  read and skipped with a note; selecting it is allowed, and the first ``MEAS`` under it
-  is refused naming the ``SNSDEF`` (:class:`~probegen.sim.cmm.state.ForeignSensor`).
+  stylus.  On a machine tool (a ``Cmm`` without ``select_sensor``) an indexed form is
+  noted: the machine tool's stylus is fixed and touches the same ball centres.  On a
+  CMM with a head and a rack of styli (a ``Cmm`` whose ``select_sensor`` is set)
+  ``SNSLCT/S(x)`` takes the rack's stylus of the sensor's ball and turns the head to
+  the sensor's direction (``POL`` angles above; a ``CART`` or ``VEC`` sensor must be
+  vertical); its ball is touched and compensated with from then on.  Another kind
+  (``VIDEO``, ``LASER``, ``INFRED``, ``NONCON`` ...) is read and skipped with a note;
+  selecting it is allowed, and the first ``MEAS`` under it is refused naming the
+  ``SNSDEF`` (:class:`~probegen.sim.cmm.state.ForeignSensor`).
 * ``SNSLCT/S(x)[,...]`` and ``SNSLCT/SA(x)[,...]``: as before, the extra values (a head
-  index) noted.
+  index) noted on a machine tool; on a CMM with a head they are not executed (the head
+  turns to the angles of the sensor's ``SNSDEF``).
 * ``SNSET``: ``APPRCH``, ``RETRCT``, ``SEARCH``, ``DEPTH`` with a distance are executed;
   ``CLRSRF`` (``dist``, ``F(x),dist``, ``OFF``) and vision settings (``VA(x)``,
   ``VL(x)``, ``VF(x)``, ``VW(x)`` with their values) are left out with a note; any other
@@ -17,6 +37,8 @@
 """
 
 from __future__ import annotations
+
+import math
 
 from probegen.dmis.reader import Label, Param, Statement, format_param
 from probegen.sim.cmm.state import ForeignSensor, NotExecutable, SkipWithNote, VmState
@@ -83,10 +105,51 @@ def do_snsdef(state: VmState, st: Statement) -> None:
     if diameter < 0.0:
         raise state.error(f"SNSDEF: the ball diameter must be >= 0, found {diameter}")
     state.sensors[st.label.name] = diameter
+    state.sensor_axes[st.label.name] = _stylus_axis(state, st.params)
     state.foreign.pop(st.label.name, None)
-    if "INDEX" in st.params[1:3] and not _straight_down(st.params):
+    if _head(state) is None and "INDEX" in st.params[1:3] and not _straight_down(st.params):
         state.notes.append((st.line, st.text, "an indexed probe head: the machine tool's "
                             "stylus is fixed and touches the same ball centres"))
+
+
+Axis = tuple[tuple[float, float, float], tuple[float, float] | None]
+"""A sensor's stylus axis (ball towards head, unit, machine frame) and its head angles
+``(A, B)`` in degrees (None for a fixed vertical sensor)."""
+
+
+def head_direction(a: float, b: float) -> tuple[float, float, float]:
+    """The stylus direction (head to ball, unit) at head angles ``A``, ``B`` (deg), see
+    the module docstring."""
+    sa, ca = math.sin(math.radians(a)), math.cos(math.radians(a))
+    sb, cb = math.sin(math.radians(b)), math.cos(math.radians(b))
+    return (sa * sb + 0.0, -sa * cb + 0.0, -ca + 0.0)
+
+
+def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> Axis | None:
+    """The axis from the ball towards the head of a ``SNSDEF/PROBE`` (machine frame) and
+    the head angles ``(A, B)`` (deg) of a ``POL`` form, or None when the form does not
+    say it in a way the virtual CMM executes."""
+    numbers = [float(p) if isinstance(p, (int, float)) else None for p in params]
+    if len(params) > 2 and params[2] == "POL":
+        if len(params) < 8 or None in numbers[3:8]:
+            return None
+        mount = numbers[5:8]
+        if mount[0] == 0.0 and mount[1] == 0.0 and mount[2] != 0.0:
+            a, b = (float(v) * state.angle_scale * 180.0 / math.pi  # type: ignore[arg-type]
+                    for v in numbers[3:5])
+            d = head_direction(a, b)
+            return (-d[0] + 0.0, -d[1] + 0.0, -d[2] + 0.0), (a, b)
+        return None
+    vectors = numbers[3:9]  # CART: tip offset x,y,z and i,j,k; VEC: two vectors
+    if len(vectors) < 6 or None in vectors:
+        return None
+    off_vertical = any(v != 0.0 for k, v in enumerate(vectors) if k % 3 != 2)
+    return None if off_vertical else ((0.0, 0.0, 1.0), None)
+
+
+def _head(state: VmState) -> object | None:
+    """The CMM's ``select_sensor`` (an indexable head with a rack of styli), or None."""
+    return getattr(state.cmm, "select_sensor", None)
 
 
 def _straight_down(params: tuple[object, ...]) -> bool:
@@ -104,6 +167,9 @@ def do_snslct(state: VmState, st: Statement) -> None:
         raise state.error("SNSLCT expects S(name) or SA(name)")
     ref = st.params[0]
     machine = float(state.cmm.ball_radius)
+    if len(st.params) > 1 and _head(state) is not None:
+        raise NotExecutable("SNSLCT with head angles: the virtual CMM turns the head to "
+                            "the angles of the sensor's SNSDEF")
     if len(st.params) > 1:
         state.notes.append((st.line, st.text, "the head orientation "
                             f"{', '.join(format_param(p) for p in st.params[1:])}: the "
@@ -123,6 +189,16 @@ def do_snslct(state: VmState, st: Statement) -> None:
     diameter = state.sensors[name]
     if diameter == 0.0:
         state.use_machine_stylus(st, f"S({name}) has a zero ball diameter")
+        return
+    select = _head(state)
+    if select is not None:
+        axis = state.sensor_axes.get(name)
+        if axis is None:
+            raise NotExecutable(f"S({name}): the stylus direction of this SNSDEF form (a "
+                                "CART or VEC sensor that is not vertical, or a POL sensor "
+                                "with a mount vector that is not vertical)")
+        select(name, diameter / 2.0, *axis)  # type: ignore[operator]
+        state.radius = diameter / 2.0
         return
     if abs(diameter / 2.0 - machine) > SENSOR_MATCH:
         raise NotExecutable(f"the sensor's ball is D{diameter:g} mm, the machine's stylus "

@@ -128,6 +128,9 @@ class VmState:
     tolerances: dict[str, Tolerance] = field(default_factory=dict)
     results: dict[str, ToleranceResult] = field(default_factory=dict)
     sensors: dict[str, float] = field(default_factory=dict)
+    sensor_axes: dict[str, tuple[tuple[float, float, float], tuple[float, float] | None] | None] \
+        = field(default_factory=dict)
+    """Per sensor: its stylus axis and head angles (``sensors.Axis``), or None."""
     foreign: dict[str, ForeignSensor] = field(default_factory=dict)
     selected_foreign: ForeignSensor | None = None
     radius: float | None = None

@@ -99,6 +99,10 @@ class Settings:
         feed_override: the operator's feed override dial, percent: every G1 and G31 feed
             is multiplied by it / 100, except while ``#3004`` bit 1 (value 2) holds
             feed override at 100 % (the feeds run are ``RunResult.skip_feeds``).
+        table_pivot: where the trunnion table's tilt and C axes meet, machine
+            coordinates, mm (G53.1 turns the table about it; :mod:`probegen.sim.macrob.tilt`).
+        tilt_axis: the trunnion's tilt axis, ``"A"`` (about X) or ``"B"`` (about Y).
+        tilt_range: its travel, deg, or None (not limited).
     """
 
     dprnt_blanks: bool = False
@@ -112,12 +116,16 @@ class Settings:
     g_missing: frozenset[float] = frozenset()
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
     feed_override: float = 100.0
+    table_pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tilt_axis: str = "A"
+    tilt_range: tuple[float, float] | None = None
 
 
 CONTROLS: Mapping[str, Settings] = {
     "fanuc": Settings(),
-    "haas": Settings(g_aliases={100.0: 50.1, 101.0: 51.1, 154.0: 54.1},
-                     g_missing=frozenset({15.0, 16.0, 50.1, 51.1})),
+    "haas": Settings(g_aliases={100.0: 50.1, 101.0: 51.1, 154.0: 54.1, 268.0: 68.2,
+                                253.0: 53.1, 269.0: 69.0},
+                     g_missing=frozenset({15.0, 16.0, 50.1, 51.1, 68.2, 53.1})),
 }
 """The controls the virtual machine can be (``probegen sim --control``).
 
@@ -127,7 +135,10 @@ no polar-coordinate mode (G15/G16): G100 and G101 are read as G50.1 and G51.1 (w
 the virtual machine does not model: alarm 9010), and G15, G16, G50.1 and G51.1 as written
 are alarm 10, as on the machine (``dialects/haas.py`` writes the same words).  G154 Pn
 (P1-P99) selects the additional work offsets as Fanuc's G54.1 Pn does, with the same
-variables (#7001-, #14001-: 20 per offset)."""
+variables (#7001-, #14001-: 20 per offset).  G268 X Y Z I J K (the feature coordinate
+system), G253 (the spindle normal to it) and G269 (cancel) are read as Fanuc's G68.2,
+G53.1 and G69 (:mod:`probegen.sim.macrob.tilt`); G68.2 and G53.1 as written are alarm 10,
+and a ``Q`` word (another Euler order) on G268 is alarm 9010."""
 
 
 def control_settings(control: str, **changes: Any) -> Settings:

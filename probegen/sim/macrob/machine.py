@@ -61,7 +61,7 @@ class FreeMachine:
 
     ``moves`` records ``(kind, start, end)`` of each call (kind ``"rapid"``, ``"feed"``
     or ``"skip"``) when ``record`` is True; ``turns`` records ``(start, end)`` angles of
-    each rotary move.
+    each rotary move and each G53.1 table turn.
     """
 
     def __init__(self, *, record: bool = False) -> None:
@@ -83,6 +83,10 @@ class FreeMachine:
         return None
 
     def rotate(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
+        if self.record:
+            self.turns.append((dict(start), dict(end)))
+
+    def tilt(self, start: dict[str, float], end: dict[str, float], at: Point) -> None:
         if self.record:
             self.turns.append((dict(start), dict(end)))
 

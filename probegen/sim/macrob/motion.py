@@ -19,9 +19,11 @@ G68 every position variable (#5001-, #5041-, #5061-) reads program coordinates, 
 a move naming only some axes keeps the others' program coordinates.  The block's X Y
 set the centre; it does not move.
 
+Tilted working plane ``G68.2``/``G53.1`` (a trunnion table): :mod:`probegen.sim.macrob.tilt`.
+
 Supported: G0 G1 G31 (skip) G4 G10 (L2, L20, L1/L10-L13) G28 G53 G17-G19 G20 G21
-G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G68 (G17 only) G69 G80 G90
-G91 G94 G96-G99 G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42,
+G40 G43 G44 G49 G50 G50.1 G54-G59 G54.1 Pn G61-G64 G67 G68 (G17 only) G68.2 G53.1 G69
+G80 G90 G91 G94 G96-G99 G15.  Other Fanuc G codes (G2/G3 arcs, cutter compensation G41/G42,
 scaling G51, canned cycles, G52, G92, G95 ...) raise alarm 9010 (not supported by
 the virtual machine); a G code Fanuc does not have raises alarm 10, and so does one
 the builder's control lacks (``Settings.g_missing``; ``base.CONTROLS``).  Axes other than
@@ -63,6 +65,18 @@ from probegen.sim.macrob.base import (
     alarm,
 )
 from probegen.sim.macrob.expr import Value
+from probegen.sim.macrob.tilt import (
+    IDENTITY,
+    TILT_CODE,
+    TOOL_AXIS_CODE,
+    FeatureFrame,
+    check_probing,
+    frame_of_block,
+    on_table,
+    table_rotation,
+    turn_table,
+    turned,
+)
 from probegen.sim.macrob.variables import (
     D_GEOMETRY,
     D_WEAR,
@@ -90,7 +104,7 @@ MODAL_GROUPS: dict[int, int] = {
     0: 1, 10: 1, 170: 2, 180: 2, 190: 2, 900: 3, 910: 3, 940: 5, 200: 6, 210: 6, 400: 7,
     430: 8, 440: 8, 490: 8, 800: 9, 980: 10, 990: 10, 500: 11, 670: 12, 960: 13, 970: 13,
     540: 14, 550: 14, 560: 14, 570: 14, 580: 14, 590: 14, 541: 14, 610: 15, 620: 15,
-    630: 15, 640: 15, 680: 16, 690: 16, 150: 17, 501: 22,
+    630: 15, 640: 15, 680: 16, 682: 16, 690: 16, 150: 17, 501: 22,
 }
 """Supported modal G codes (in tenths: G54.1 is 541) and their group."""
 DEFAULT_MODAL: dict[int, float] = {
@@ -100,7 +114,7 @@ DEFAULT_MODAL: dict[int, float] = {
 }
 """The modal G codes at power-on (read as #4001-#4022)."""
 DWELL, DATA, REFERENCE, SKIP, MACHINE = 40, 100, 280, 310, 530
-ONE_SHOT = frozenset({DWELL, DATA, REFERENCE, SKIP, MACHINE})
+ONE_SHOT = frozenset({DWELL, DATA, REFERENCE, SKIP, MACHINE, TOOL_AXIS_CODE})
 FANUC_G = frozenset(
     [int(g * 10) for g in (2, 3, 5, 7.1, 9, 11, 16, 22, 23, 27, 29, 30, 33, 37, 39, 40.1, 41,
                            41.1, 42, 42.1, 45, 46, 47, 48, 51, 51.1, 52, 60, 65, 66, 92,
@@ -153,6 +167,13 @@ class Motion:
         self.offset: Point = (0.0, 0.0, 0.0)
         self.rotation: tuple[float, float, float] | None = None
         """G68 in force: centre X, Y (work coordinates, program unit) and degrees."""
+        self.feature: FeatureFrame | None = None
+        """G68.2 in force (:mod:`probegen.sim.macrob.tilt`), or None."""
+        self.table: dict[str, float] = dict(getattr(machine, "table", None) or {
+            settings.tilt_axis: 0.0, "C": 0.0})
+        """Trunnion table angles, deg: where the machine's table stands (a program run after
+        one that left it turned starts there), then where G53.1 turned it."""
+        self.table_matrix = table_rotation(self.table) if turned(self.table) else IDENTITY
         self.sync()
 
     # -- coordinates ----------------------------------------------------------------
@@ -176,18 +197,31 @@ class Motion:
     def to_work(self, point: Point) -> list[float]:
         """Machine coordinates (mm) → work (program) coordinates (program unit)."""
         unit, off = self.unit, self.offset
+        if self.feature is not None:
+            if turned(self.table):
+                point = self.table_point(point, -1)
+            return self.feature.to_frame([point[i] / unit - off[i] for i in range(3)])
         work = [point[i] / unit - off[i] for i in range(3)]
         return self.rotate(work, -1.0) if self.rotation else work
 
     def to_machine(self, work: list[float], named: set[int]) -> Point:
         """Work (program) coordinates → machine; axes not in ``named`` keep their
-        machine value (under G68: their program value)."""
+        machine value (under G68 and G68.2: their program value)."""
         unit, off, pos = self.unit, self.offset, self.position
+        if self.feature is not None and named:
+            w = self.feature.to_work(work)
+            q = ((w[0] + off[0]) * unit, (w[1] + off[1]) * unit, (w[2] + off[2]) * unit)
+            return self.table_point(q, 1) if turned(self.table) else q
         if self.rotation:
             work = self.rotate(work, 1.0)
             named = named | ({0, 1} if named & {0, 1} else set())
         x, y, z = ((work[i] + off[i]) * unit if i in named else pos[i] for i in range(3))
         return x, y, z
+
+    def table_point(self, point: Point, sense: int) -> Point:
+        """A table-frame point where the turned table carries it (1) or back (-1)."""
+        return on_table(point, sense, self.tlo * self.unit, self.table_matrix,
+                        self.settings.table_pivot)
 
     def rotate(self, p: list[float], sense: float) -> list[float]:
         """G68: program → work coordinates (``sense`` 1) or back (-1)."""
@@ -214,12 +248,24 @@ class Motion:
         if one_shot == DATA:
             self.g10(addr)
             return
+        if TILT_CODE in self.codes or TOOL_AXIS_CODE in self.codes:
+            others = [c for c in self.codes if c in ONE_SHOT and c != TOOL_AXIS_CODE]
+            if TILT_CODE in self.codes and TOOL_AXIS_CODE in self.codes:
+                others.append(TOOL_AXIS_CODE)
+            if others:
+                raise alarm(UNSUPPORTED, f"G68.2/G53.1 WITH {_g(others[0])} IN ONE BLOCK")
+        if TILT_CODE in self.codes:
+            self.g68_2(addr)
+            return
         if 680 in self.codes:
             self.g68(addr)
             return
-        if 690 in self.codes and self.rotation is not None:
-            self.rotation = None
+        if 690 in self.codes and (self.rotation is not None or self.feature is not None):
+            self.rotation = self.feature = None
             self.work = self.to_work(self.position)
+        if one_shot == TOOL_AXIS_CODE:
+            self.tool_axis()
+            return
         axes = self.axes(addr, one_shot)
         turns = self.rotary_words(addr, one_shot)
         if turns:
@@ -274,10 +320,9 @@ class Motion:
             if not 1 <= self.extended <= MAX_EXTENDED:
                 raise alarm(ILLEGAL_OFFSET, f"G54.1 P{self.extended}")
         if "H" in addr and self.modal[8] != 49.0:
-            self.h = round(addr["H"][0])
+            self.take_length(round(addr["H"][0]))
             if not 0 <= self.h <= MAX_OFFSET:
                 raise alarm(ILLEGAL_OFFSET, f"H{self.h}")
-            self.changed = True
         if self.changed:
             self.apply_offsets()
 
@@ -381,6 +426,7 @@ class Motion:
     def skip(self, start: Point, stop: Point, feed: float, end: list[float]) -> bool:
         """G31: move until the skip signal; record the skip point (#5061-#5063).
         Return whether the signal came (the LinuxCNC control's ``#5070``)."""
+        check_probing(self.feature, self.table, self.table_matrix)
         hit = self.machine.skip(start, stop, feed)
         if hit is None:
             self.position, self.work = stop, end
@@ -424,14 +470,28 @@ class Motion:
             self.clock_ms += (value * 0.001 if integer else value) * 1000.0
 
     def change_tool(self) -> None:
-        """M6: the selected tool goes into the spindle."""
+        """M6: the selected tool goes into the spindle (a machine with a stylus rack,
+        ``select_tool``, takes that stylus or raises the alarm naming the tool)."""
         self.tool = self.next_tool
+        select = getattr(self.machine, "select_tool", None)
+        if select is not None:
+            select(self.tool)
+
+    def take_length(self, h: int) -> None:
+        """G43/G44 H: the length offset ``h`` from now on (a machine with a stylus rack,
+        ``check_length``, refuses an H that is not the tool in the spindle)."""
+        self.h = h
+        self.changed = True
+        check = getattr(self.machine, "check_length", None)
+        if check is not None:
+            check(h, self.tool)
 
     # -- G68 ----------------------------------------------------------------------------
     def g68(self, addr: dict[str, tuple[float, bool]]) -> None:
         """G68 X Y R: rotate the program frame (plane G17, absolute centre)."""
         if self.modal[2] != 17.0:
             raise alarm(UNSUPPORTED, "G68 OUTSIDE G17")
+        self.feature = None  # G68 and G68.2 share modal group 16
         here = self.to_work(self.position)
         if self.rotation is not None:
             here = self.rotate(here, 1.0)
@@ -439,6 +499,22 @@ class Motion:
                   for i, a in enumerate("XY"))
         degrees = addr.get("R", (0.0, False))[0]
         self.rotation = (cx, cy, degrees)
+        self.work = self.to_work(self.position)
+
+    # -- G68.2 / G53.1 (probegen.sim.macrob.tilt) ----------------------------------------
+    def g68_2(self, addr: dict[str, tuple[float, bool]]) -> None:
+        """G68.2 X Y Z I J K: the feature coordinate system (the block does not move)."""
+        self.rotation = None
+        self.feature = frame_of_block(addr, self.length, self.angle)
+        self.work = self.to_work(self.position)
+
+    def tool_axis(self) -> None:
+        """G53.1: turn the trunnion table so that the tool axis is the frame's +Z."""
+        end = turn_table(self.feature, self.machine, self.table, self.position,
+                         self.settings.tilt_range)
+        swept = max(abs(end[a] - self.table[a]) for a in end)
+        self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
+        self.table, self.table_matrix = end, table_rotation(end)
         self.work = self.to_work(self.position)
 
     # -- G10 ----------------------------------------------------------------------------

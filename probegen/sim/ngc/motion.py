@@ -142,8 +142,7 @@ class NgcMotion(Motion):
         self.sync()
         one_shot = self.modal_codes(gs)
         if 430 in self.codes:
-            self.h = round(addr["H"]) if "H" in addr else self.tool
-            self.changed = True
+            self.take_length(round(addr["H"]) if "H" in addr else self.tool)
         if self.changed:
             self.apply_offsets()
         words = {k: (v, False) for k, v in addr.items()}
