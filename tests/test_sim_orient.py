@@ -538,3 +538,29 @@ def test_cmm_head_indexes_only_its_angles(side_bore: cad.Part, a: str, b: str,
         assert res.alarm is not None
         assert res.alarm.startswith(f"{HEAD_INDEX} SENSOR S(X) {alarm}: NOT AN INDEX OF THE "
                                     "HEAD (A 0..105, B -180..180, STEP 7.5)")
+
+
+def test_g53_turns_the_table_back_after_g69(side_bore: cad.Part) -> None:
+    """The dialect's way back to the vertical: ``G69`` leaves the table turned, ``G53 A0
+    C0`` turns it to zero; a vertical probing move after it runs (no alarm 9021), and
+    ``G53`` naming a table axis with a linear axis, or a tilt outside the travel, is an
+    alarm."""
+    back = program().replace("G53 Z0.\nG68.2 X0. Y0. Z0. I0. J0. K0.\nG53.1\nG69\n",
+                             "G53 Z0.\nG69\nG53 A0 C0\nG0 X-20. Y-20.\nG0 Z5.\n"
+                             "G31 Z-5. F200.\n")
+    assert back != program()
+    vm = machine(side_bore)
+    res = run_text(back, vm, kind="macrob", work_offset=WORK)
+    assert res.alarm is None, res.alarm
+    assert res.touches == 4  # the vertical G31 beside the block ends in the air
+    left = run_text(back.replace("G53 A0 C0\n", ""), machine(side_bore), kind="macrob",
+                    work_offset=WORK)
+    assert left.alarm is not None and left.alarm.startswith("9021 ")
+    mixed = run_text(back.replace("G53 A0 C0", "G53 A0 C0 Z0"), machine(side_bore),
+                     kind="macrob", work_offset=WORK)
+    assert mixed.alarm is not None and mixed.alarm.startswith("9010 ")
+    vm = machine(side_bore)
+    vm.tilt_range = (-110.0, 110.0)
+    far = run_text(back.replace("G53 A0 C0", "G53 A-120. C0"), vm, kind="macrob",
+                   work_offset=WORK)
+    assert far.alarm is not None and far.alarm.startswith("9022 G53 A-120")

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import math
 
+from probegen.sim.alarms import SimAlarm
 from probegen.sim.macrob.base import (
     FEED_ZERO,
     ILLEGAL_G10,
@@ -67,6 +68,7 @@ from probegen.sim.macrob.base import (
 from probegen.sim.macrob.expr import Value
 from probegen.sim.macrob.tilt import (
     IDENTITY,
+    OUT_OF_TRAVEL,
     TILT_CODE,
     TOOL_AXIS_CODE,
     FeatureFrame,
@@ -265,6 +267,9 @@ class Motion:
             self.work = self.to_work(self.position)
         if one_shot == TOOL_AXIS_CODE:
             self.tool_axis()
+            return
+        if one_shot == MACHINE and self.table_words(addr):
+            self.table_move(addr)
             return
         axes = self.axes(addr, one_shot)
         turns = self.rotary_words(addr, one_shot)
@@ -515,6 +520,36 @@ class Motion:
         swept = max(abs(end[a] - self.table[a]) for a in end)
         self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
         self.table, self.table_matrix = end, table_rotation(end)
+        self.work = self.to_work(self.position)
+
+    def table_words(self, addr: dict[str, tuple[float, bool]]) -> bool:
+        """Whether a G53 block turns the trunnion table (a machine with ``tilt``: its
+        tilt axis or C named)."""
+        return getattr(self.machine, "tilt", None) is not None and any(
+            a in addr for a in (self.settings.tilt_axis, "C"))
+
+    def table_move(self, addr: dict[str, tuple[float, bool]]) -> None:
+        """``G53 A.. C..`` (or ``B.. C..``): turn the trunnion table to machine angles,
+        the linear axes standing still (a block naming a linear axis too is alarm 9010);
+        how a program brings the table back after ``G69``, which leaves it turned."""
+        named = [a for a in "XYZUVW" if a in addr]
+        if named:
+            raise alarm(UNSUPPORTED, f"G53 WITH {named[0]} AND A TABLE AXIS IN ONE BLOCK")
+        end = dict(self.table)
+        for letter in end:
+            if letter in addr:
+                end[letter] = self.angle(*addr[letter])
+        low, high = self.settings.tilt_range or (-360.0, 360.0)
+        tilt_axis = self.settings.tilt_axis
+        if not low - 1e-9 <= end[tilt_axis] <= high + 1e-9:
+            raise SimAlarm(OUT_OF_TRAVEL, f"G53 {tilt_axis}{end[tilt_axis]:g}: OUTSIDE "
+                           f"{low:g}..{high:g} (THE TILT AXIS'S TRAVEL)")
+        if end != self.table:
+            self.machine.tilt(dict(self.table), end, self.position)  # type: ignore[attr-defined]
+            swept = max(abs(end[a] - self.table[a]) for a in end)
+            self.clock_ms += swept / self.settings.rapid_mm_min * 60_000.0
+        self.table = end
+        self.table_matrix = table_rotation(end) if turned(end) else IDENTITY
         self.work = self.to_work(self.position)
 
     # -- G10 ----------------------------------------------------------------------------
