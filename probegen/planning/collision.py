@@ -40,6 +40,7 @@ import numpy as np
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
+from probegen.ir import frames
 from probegen.machine.profile import MachineProfile
 
 if TYPE_CHECKING:
@@ -323,12 +324,18 @@ class _Walker:
 
 def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                   machine: MachineProfile, *,
-                  progress: Callable[[int], None] | None = None) -> ClearanceReport:
+                  progress: Callable[[int], None] | None = None,
+                  part: Part | None = None) -> ClearanceReport:
     """Check every move of ``program``; raise ``CollisionError`` at the first bad one.
 
     ``plans`` are the located features: :class:`Located` records or sphere-test plans
     (their id, nominal centre and locate uncertainty); features set up by the work
     offset (revolved features) need none.
+
+    After an ``ir.Orient`` the nodes are checked in its frame against ``part`` turned
+    (``part`` is needed then), and the orientation change itself as moves
+    (:func:`orientation_change`); after an ``ir.SelectStylus`` with that stylus, the
+    change checked where it is taken (:func:`stylus_change`).
     """
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -344,6 +351,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
 
     inside = getattr(obstacle, "inside", None)
     outside: set[tuple[float, float, float]] = set()
+    frame: ir.Orient | None = None
+    entering = False
 
     def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str,
               touch: bool = False) -> None:
@@ -365,7 +374,31 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     for node in ir.walk(program.body):
         if progress is not None:
             progress(1)
-        if isinstance(node, ir.FeatureBlock):
+        if isinstance(node, ir.Orient):
+            if part is None:
+                raise PlanningError(f"orientation {node.name}: the check of a turned probe "
+                                    "needs the part model, found none")
+            level = setup.clearance_z if frame is None else frame.clearance_z
+            new = obstacle_for(part.turned(node.rotation), [])
+            if pos is not None:
+                index = index_point(part, frame, pos, level, node, stylus, machine)
+                check(pos, to_frame(frame, index), 0.0, 0.0,
+                      f"up to the index point of {node.name}")
+                obstacle, inside, outside = new, getattr(new, "inside", None), set()
+                pos = to_frame(node, index)
+                entering = True
+            obstacle, inside, frame = new, getattr(new, "inside", None), node
+        elif isinstance(node, ir.SelectStylus):
+            level = setup.clearance_z if frame is None else frame.clearance_z
+            if pos is not None and pos[2] < level - LEVEL_SLACK:
+                raise CollisionError(f"stylus change to {node.label}: the probe is at "
+                                     f"z = {pos[2]:.3f}, expected the clearance level "
+                                     f"{level:.3f} or above")
+            stylus = Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
+            r = stylus.ball
+            if pos is not None:
+                check(pos, pos, 0.0, 0.0, f"stylus change to {node.label}")
+        elif isinstance(node, ir.FeatureBlock):
             feature = node.feature.id
         elif w.follow(node):
             pass
@@ -375,8 +408,17 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 if touch_start is None or not np.allclose(target, touch_start, atol=1e-9):
                     raise PlanningError(f"feature {feature}: a retract must return to the "
                                         f"start of its touch, found {fmt(target)}")
+            elif pos is not None and entering and frame is not None:
+                if target[2] < frame.clearance_z - LEVEL_SLACK:
+                    raise PlanningError(f"orientation {frame.name}: the first move after it "
+                                        f"goes to frame z = {target[2]:.3f}, expected its "
+                                        f"clearance level {frame.clearance_z:.3f}")
+                over = to_frame(frame, _over(to_work(frame, pos), to_work(frame, target)))
+                check(pos, over, 0.0, 0.0, f"from the index point of {frame.name}")
+                check(over, target, 0.0, extra, node.mode.value)
             elif pos is not None:
                 check(pos, target, pos_extra, extra, node.mode.value)
+            entering = False
             pos, pos_extra, touch_start = target, extra, None
         elif isinstance(node, ir.Touch):
             feature = node.feature
@@ -394,6 +436,50 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                     w.values[name] = float((contact + r * n - w.origin())[axis])
             touch_start = start
     return ClearanceReport(tuple(out))
+
+
+LEVEL_SLACK = 1e-6
+"""A position this far (mm) below a clearance level is at it."""
+
+
+def to_frame(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Work point ``p`` in ``frame``'s coordinates (None: the work frame)."""
+    return np.asarray(frames.to_frame(frame, _t(p)))
+
+
+def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Point ``p`` of ``frame`` in work coordinates (None: the work frame)."""
+    return np.asarray(frames.to_work(frame, _t(p)))
+
+
+def index_height(part: Part, stylus: Stylus, machine: MachineProfile) -> float:
+    """The work Z where the probe changes orientation, mm: the part's top plus the whole
+    stylus (length and ball), the head's body on a CMM and the margin, so that the
+    stylus clears the part's bounding box in every direction it turns to."""
+    body = machine.head.body_length if machine.head is not None else 0.0
+    return part.bbox_max[2] + stylus.length + stylus.ball + body + machine.margin
+
+
+def index_point(part: Part, frame: ir.Orient | None, pos: np.ndarray, level: float,
+                node: ir.Orient, stylus: Stylus, machine: MachineProfile) -> np.ndarray:
+    """Where orientation change ``node`` is taken (work coordinates): straight up (work
+    +Z) from ``pos`` (the old ``frame``'s coordinates) to :func:`index_height`.
+
+    Raises:
+        CollisionError: ``pos`` is below the old frame's clearance ``level``.
+    """
+    if pos[2] < level - LEVEL_SLACK:
+        raise CollisionError(f"orientation change to {node.name}: the probe is at frame "
+                             f"z = {pos[2]:.3f}, expected the old frame's clearance level "
+                             f"{level:.3f} or above")
+    here = to_work(frame, pos)
+    return np.array([here[0], here[1], max(here[2], index_height(part, stylus, machine))])
+
+
+def _over(index: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The point at the index height over ``target`` (both work coordinates): the new
+    orientation goes there level, then to its first point."""
+    return np.array([target[0], target[1], max(index[2], target[2])])
 
 
 SLANT_FACTOR = 0.9

@@ -75,6 +75,28 @@ def _need_part(part: Part | None, feature: RevolvedSpec) -> Part:
     return part
 
 
+def find_owner(feature: RevolvedSpec, part: Part) -> Any:
+    """The recognised revolved feature (``cad.revolved.RevolvedFeature``) holding the
+    spec feature's face (``face`` or ``at``), accessible or not.
+
+    Raises:
+        ModelError: the face is not a face of a revolved feature of the right type.
+    """
+    from probegen import cad
+    from probegen.cad.revolved import revolved_features
+
+    face = cad.face_by_id(part.model, feature.face) if feature.face else cad.face_at(
+        part.model, feature.at or (0.0, 0.0, 0.0))
+    owner = next((f for f in revolved_features(part) if face.id in f.faces), None)
+    want = TYPE_OF_KIND[feature.kind]
+    if owner is None or owner.type != want:
+        what = f"face {face.id} of type {face.type}" if owner is None else (
+            f"face {face.id} of revolved feature {owner.id}, a {owner.type}")
+        raise ModelError(f"{feature.where}: expected a face of a {want} for kind "
+                         f"{feature.kind}, found {what}")
+    return owner
+
+
 def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolved:
     """Find the recognised feature and its sections.
 
@@ -84,20 +106,10 @@ def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolv
         PlanningError: the feature or a chosen section is not accessible (with the
             recognition's reason).
     """
-    from probegen import cad
-    from probegen.cad.revolved import revolved_features, section_at
+    from probegen.cad.revolved import section_at
 
     part = _need_part(part, feature)
-    face = cad.face_by_id(part.model, feature.face) if feature.face else cad.face_at(
-        part.model, feature.at or (0.0, 0.0, 0.0))
-    found = revolved_features(part)
-    owner = next((f for f in found if face.id in f.faces), None)
-    want = TYPE_OF_KIND[feature.kind]
-    if owner is None or owner.type != want:
-        what = f"face {face.id} of type {face.type}" if owner is None else (
-            f"face {face.id} of revolved feature {owner.id}, a {owner.type}")
-        raise ModelError(f"{feature.where}: expected a face of a {want} for kind "
-                         f"{feature.kind}, found {what}")
+    owner = find_owner(feature, part)
     if not owner.accessible:
         raise PlanningError(f"{feature.where}: revolved feature {owner.id} ({owner.type}, "
                             f"faces {','.join(map(str, owner.faces))}) is not accessible: "
