@@ -11,8 +11,8 @@ Conventions:
   vertical-probe feature is today.
 * A CMM's indexable head (``machine.head``): ``A`` is the angle of the stylus from straight
   down (0: vertical, 90: horizontal), ``B`` the azimuth about the vertical, counter-clockwise
-  seen from above, with ``B = 0`` pointing the stylus towards -Y.  The approach direction
-  (from the ball towards the head) is then
+  seen from above, with ``B = 0`` pointing the stylus towards -Y, in ``(-180, 180]``.
+  The approach direction (from the ball towards the head) is then
   ``a = (-sin A·sin B, sin A·cos B, cos A)``: ``A90B0`` probes faces facing +Y,
   ``A90B-90`` faces facing +X, ``A90B90`` faces facing -X, ``A90B180`` faces facing -Y.
   The DMIS dialect writes these angles as ``SNSDEF/PROBE,INDEX,POL,A,B,...``.  Both angles
@@ -87,7 +87,8 @@ def head_angles(a: ir.Vec3) -> tuple[float, float]:
     big_a = math.degrees(math.acos(z))
     if math.hypot(a[0], a[1]) < frames.VERTICAL:
         return big_a, 0.0
-    return big_a, math.degrees(math.atan2(-a[0], a[1]))
+    big_b = math.degrees(math.atan2(-a[0], a[1])) + 0.0
+    return big_a, (180.0 if big_b <= -180.0 + GRID_SNAP else big_b)
 
 
 def head_direction(big_a: float, big_b: float) -> ir.Vec3:
