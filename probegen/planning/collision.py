@@ -40,8 +40,8 @@ import numpy as np
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
-from probegen.ir import frames
 from probegen.machine.profile import MachineProfile
+from probegen.planning.orient import LEVEL_SLACK, index_point, over_point, to_frame, to_work
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -413,7 +413,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                     raise PlanningError(f"orientation {frame.name}: the first move after it "
                                         f"goes to frame z = {target[2]:.3f}, expected its "
                                         f"clearance level {frame.clearance_z:.3f}")
-                over = to_frame(frame, _over(to_work(frame, pos), to_work(frame, target)))
+                over = to_frame(frame, over_point(to_work(frame, pos), to_work(frame, target)))
                 check(pos, over, 0.0, 0.0, f"from the index point of {frame.name}")
                 check(over, target, 0.0, extra, node.mode.value)
             elif pos is not None:
@@ -436,50 +436,6 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                     w.values[name] = float((contact + r * n - w.origin())[axis])
             touch_start = start
     return ClearanceReport(tuple(out))
-
-
-LEVEL_SLACK = 1e-6
-"""A position this far (mm) below a clearance level is at it."""
-
-
-def to_frame(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
-    """Work point ``p`` in ``frame``'s coordinates (None: the work frame)."""
-    return np.asarray(frames.to_frame(frame, _t(p)))
-
-
-def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
-    """Point ``p`` of ``frame`` in work coordinates (None: the work frame)."""
-    return np.asarray(frames.to_work(frame, _t(p)))
-
-
-def index_height(part: Part, stylus: Stylus, machine: MachineProfile) -> float:
-    """The work Z where the probe changes orientation, mm: the part's top plus the whole
-    stylus (length and ball), the head's body on a CMM and the margin, so that the
-    stylus clears the part's bounding box in every direction it turns to."""
-    body = machine.head.body_length if machine.head is not None else 0.0
-    return part.bbox_max[2] + stylus.length + stylus.ball + body + machine.margin
-
-
-def index_point(part: Part, frame: ir.Orient | None, pos: np.ndarray, level: float,
-                node: ir.Orient, stylus: Stylus, machine: MachineProfile) -> np.ndarray:
-    """Where orientation change ``node`` is taken (work coordinates): straight up (work
-    +Z) from ``pos`` (the old ``frame``'s coordinates) to :func:`index_height`.
-
-    Raises:
-        CollisionError: ``pos`` is below the old frame's clearance ``level``.
-    """
-    if pos[2] < level - LEVEL_SLACK:
-        raise CollisionError(f"orientation change to {node.name}: the probe is at frame "
-                             f"z = {pos[2]:.3f}, expected the old frame's clearance level "
-                             f"{level:.3f} or above")
-    here = to_work(frame, pos)
-    return np.array([here[0], here[1], max(here[2], index_height(part, stylus, machine))])
-
-
-def _over(index: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """The point at the index height over ``target`` (both work coordinates): the new
-    orientation goes there level, then to its first point."""
-    return np.array([target[0], target[1], max(index[2], target[2])])
 
 
 SLANT_FACTOR = 0.9

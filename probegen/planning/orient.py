@@ -30,10 +30,12 @@ import itertools
 import math
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import numpy as np
 
 from probegen import ir
-from probegen.errors import PlanningError, ProbegenError
+from probegen.errors import CollisionError, PlanningError, ProbegenError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
 
@@ -223,6 +225,54 @@ def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T
             first = first or exc
     assert first is not None
     raise first
+
+
+# ------------------------------------------------------- the moves of a change
+
+LEVEL_SLACK = 1e-6
+"""A position this far (mm) below a clearance level is at it."""
+
+
+def to_frame(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Work point ``p`` in ``frame``'s coordinates (None: the work frame)."""
+    return np.asarray(frames.to_frame(frame, (float(p[0]), float(p[1]), float(p[2]))))
+
+
+def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Point ``p`` of ``frame`` in work coordinates (None: the work frame)."""
+    return np.asarray(frames.to_work(frame, (float(p[0]), float(p[1]), float(p[2]))))
+
+
+def index_height(part: Part, stylus: Any, machine: MachineProfile) -> float:
+    """The work Z where the probe changes orientation, mm: the part's top plus the whole
+    stylus (length and ball), the head's body on a CMM and the margin, so that the
+    stylus clears the part's bounding box in every direction it turns to.  ``stylus``:
+    the collision check's (``ball`` radius and ``length``, mm)."""
+    body = machine.head.body_length if machine.head is not None else 0.0
+    return part.bbox_max[2] + stylus.length + stylus.ball + body + machine.margin
+
+
+def index_point(part: Part, frame: ir.Orient | None, pos: np.ndarray, level: float,
+                node: ir.Orient, stylus: Any, machine: MachineProfile) -> np.ndarray:
+    """Where orientation change ``node`` is taken (work coordinates): straight up (work
+    +Z) from ``pos`` (the old ``frame``'s coordinates) to :func:`index_height`.
+
+    Raises:
+        CollisionError: ``pos`` is below the old frame's clearance ``level``.
+    """
+    if pos[2] < level - LEVEL_SLACK:
+        raise CollisionError(f"orientation change to {node.name}: the probe is at frame "
+                             f"z = {pos[2]:.3f}, expected the old frame's clearance level "
+                             f"{level:.3f} or above")
+    here = to_work(frame, pos)
+    return np.array([here[0], here[1], max(here[2], index_height(part, stylus, machine))])
+
+
+def over_point(index: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The point at the index height over ``target`` (both work coordinates): the new
+    orientation goes there level, then to its first point."""
+    return np.array([target[0], target[1], max(index[2], target[2])])
+
 
 
 Group = tuple[str, Hashable]

@@ -36,7 +36,7 @@ from probegen.planning.orient import (
     pick_stylus,
     select_node,
 )
-from probegen.planning.revolved_spec import RevolvedPlan, find_owner, plan_revolved
+from probegen.planning.revolved_plan import RevolvedPlan, find_owner, plan_revolved
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -94,6 +94,12 @@ def approaches(owner: Any, part: Part) -> list[ir.Vec3]:
     return [a for _, a in sorted(out, key=lambda t: t[0])]
 
 
+def reorientable(owner: Any, machine: MachineProfile) -> bool:
+    """Whether a recognised feature not reachable from above may be in another
+    orientation: the machine turns its probe and the feature has an axis (not a sphere)."""
+    return can_orient(machine) and owner.type != "sphere"
+
+
 def in_frame(feature: RevolvedSpec, rotation: frames.Rotation) -> RevolvedSpec:
     """The spec feature as the turned part sees it (``at`` turned into the frame)."""
     if feature.at is None:
@@ -122,7 +128,7 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         plan_revolved(feature, part, machine, clearance_z)  # the SpecError of no model
         raise AssertionError("unreachable")  # pragma: no cover
     owner = find_owner(feature, part)
-    if owner.accessible or not can_orient(machine) or owner.type == "sphere":
+    if owner.accessible or not reorientable(owner, machine):
         s, plan = pick_stylus(machine, _planner(feature, part, clearance_z), force)
         return OrientedPlan(plan, identity_of(machine), s, part, clearance_z)
     reasons: list[str] = []
@@ -144,8 +150,7 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
     if errors:
         raise errors[0]
     why = "; ".join(dict.fromkeys(reasons)) or "no open end to approach it from"
-    raise PlanningError(f"{feature.where}: revolved feature {owner.id} ({owner.type}, "
-                        f"faces {','.join(map(str, owner.faces))}): {why}")
+    raise PlanningError(f"{feature.where}: {why}")
 
 
 @dataclass(frozen=True, slots=True)
