@@ -320,3 +320,43 @@ def test_a_vertical_program_has_no_orient(model: Path, loaded: cad.Part) -> None
     with pytest.raises(PlanningError, match="not accessible"):
         plan_program(spec_of(model, machine, [FACES["+X"]]), runtime_variables=True,
                      part=loaded)
+
+
+def test_ingest_turns_frame_touches_back_to_work(planned: tuple[str, PlannedProgram],
+                                                 model: Path) -> None:
+    """Ball centres printed in the frame (as #5061-#5063 under G68.2) of a bore 0.01 mm
+    larger than nominal: evaluated in work coordinates with the ball of the feature's
+    stylus, the centre and axis where the model has them."""
+    from probegen.evaluate import ingest as ingest_module
+    from probegen.evaluate.revolved import RevolvedResult
+    from probegen.geometry.uncertainty import Budget
+
+    kind, p = planned
+    grow = 0.005  # radius
+    touches: dict[tuple[str, int], ir.Vec3] = {}
+    ball = p.program.setup.ball_diameter / 2.0
+    for node in p.program.body:
+        if isinstance(node, ir.SelectStylus):
+            ball = node.ball_diameter / 2.0
+        if isinstance(node, ir.FeatureBlock):
+            for t in node.body:
+                if isinstance(t, ir.Touch):
+                    c, n = np.array(t.contact, dtype=float), np.array(t.normal)
+                    touches[(t.feature, t.index)] = tuple((c - grow * n + ball * n).tolist())
+
+    class NoGaps:
+        def reason(self, feature: str, indices: object) -> str:
+            return ""
+
+    spec = spec_of(model, profile(kind), ALL)
+    for o in p.oriented:
+        notes: list[str] = []
+        out = ingest_module._revolved(o.plan.spec, spec, o, touches, notes,
+                                      NoGaps(), Budget(), None)  # type: ignore[arg-type]
+        assert isinstance(out, RevolvedResult), notes
+        face = int(o.plan.spec.id[1:])
+        record = p.oriented[0].part.original.faces[face - 1]
+        assert out.diameter == pytest.approx(2.0 * record.radius + 2.0 * grow, abs=1e-6)
+        assert abs(float(np.dot(out.axis, record.axis))) == pytest.approx(1.0, abs=1e-9)
+        off = np.subtract(out.centre, record.origin)
+        assert np.linalg.norm(off - np.dot(off, record.axis) * np.array(record.axis)) < 1e-6
