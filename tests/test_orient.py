@@ -360,3 +360,26 @@ def test_ingest_turns_frame_touches_back_to_work(planned: tuple[str, PlannedProg
         assert abs(float(np.dot(out.axis, record.axis))) == pytest.approx(1.0, abs=1e-9)
         off = np.subtract(out.centre, record.origin)
         assert np.linalg.norm(off - np.dot(off, record.axis) * np.array(record.axis)) < 1e-6
+
+
+def test_all_revolved_reaches_every_side(loaded: cad.Part) -> None:
+    """``--all-revolved`` with a head: every bore but the face-down one, which is left
+    out for a reason; the plan table names each feature's orientation and stylus."""
+    from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
+
+    machine = profile("head")
+    spec, notes = all_revolved_spec(loaded, machine)
+    assert sorted(f.face for f in spec.features) == sorted(ALL)  # type: ignore[union-attr]
+    assert notes == (f"R5 bore D8.000 (cylinder, faces {FACES['-Z']}): axis at A 180.0 B 0.0: "
+                     "beyond the head's A range 0..105: no orientation reaches this face: "
+                     "needs a setup",)
+    p = plan_program(spec, runtime_variables=False, part=loaded)
+    table = metrics_table(p.revolved, machine, p.oriented).splitlines()
+    assert table[0].endswith("orient     stylus  ")
+    rows = {line.split()[0]: line.split()[-2:] for line in table[1:-1]}
+    assert rows["R6"] == ["A90BM90", "D6"]  # recognised feature 6: the +X bore
+    assert rows["R3"] == ["-", "D2"]  # the 3 mm bore, vertical
+    plain = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    _, plain_notes = all_revolved_spec(loaded, plain)
+    assert any("not along the probe: needs an orientation or a setup" in n
+               for n in plain_notes)

@@ -178,6 +178,16 @@ def orient_name(o: Orientation, number: int) -> str:
     return "VERTICAL" if o.identity else f"FRAME{number}"
 
 
+def orientation_label(o: Orientation) -> str:
+    """A short text of an orientation for tables: ``A90BM90`` on a head, ``A45C90`` (the
+    tilt and rotary angles) on a tilt, ``-`` for the vertical probe."""
+    if o.identity:
+        return "-"
+    if o.head is not None:
+        return orient_name(o, 0)
+    return "".join(f"{axis}{_angle_text(round(angle, 3))}" for axis, angle in o.rotary)
+
+
 def frame_clearance(part: Part | None, o: Orientation, clearance_z: float) -> float:
     """The clearance level (frame Z, mm) of orientation ``o``: the turned part's top plus
     the gap the spec's clearance plane ``clearance_z`` has above the part, at least

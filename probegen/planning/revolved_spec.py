@@ -14,8 +14,8 @@ from probegen import ir
 from probegen.errors import CollisionError, ModelError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
-from probegen.planning.orient import orientation_for
-from probegen.planning.oriented import approaches, plan_oriented, reorientable
+from probegen.planning.orient import orientation_for, orientation_label
+from probegen.planning.oriented import OrientedPlan, approaches, plan_oriented, reorientable
 from probegen.planning.revolved_plan import (
     ALTERNATIVE_SECTIONS,
     DEFAULT_SECTIONS,
@@ -148,23 +148,35 @@ def _kind(f: Any) -> str:
     return KIND_OF_TYPE[f.type]
 
 
-def metrics_table(plans: tuple[RevolvedPlan, ...], machine: MachineProfile) -> str:
+def metrics_table(plans: tuple[RevolvedPlan, ...], machine: MachineProfile,
+                  oriented: tuple[OrientedPlan, ...] = ()) -> str:
     """Per feature: touches, path length (mm) and nominal cycle time (s) of the plan,
     the common baseline (up to the clearance level after every touch) and the lower
-    bound (:func:`probegen.planning.revolved.compare`), with totals."""
+    bound (:func:`probegen.planning.revolved.compare`), with totals.  With ``oriented``
+    (the program's plans with their orientation and stylus) where any feature is measured
+    turned or with another stylus than ``[probe]``'s: two more columns, the orientation
+    (``A90BM90``, ``TILT``: the tilt angle, ``-``: vertical) and the stylus label."""
     from probegen.planning.revolved import compare
 
+    extra = {o.plan.spec.id: o for o in oriented}
+    wide = any(not o.orientation.identity or o.stylus != machine.stylus for o in oriented)
     head = (f"{'feature':<8} {'kind':<8} {'side':<5} {'sect':>4} {'pts':>4}  "
             f"{'plan mm':>9} {'s':>7}  {'baseline mm':>11} {'s':>7}  {'bound mm':>9} {'s':>7}")
-    rows = [head]
+    rows = [head + (f"  {'orient':<10} {'stylus':<8}" if wide else "")]
     total = [0.0] * 6
     for p in plans:
-        c = compare(p.plan, machine)
+        o = extra.get(p.spec.id)
+        m = machine if o is None or o.stylus == machine.stylus else machine.with_stylus(
+            o.stylus)
+        c = compare(p.plan, m)
         values = (c.plan.length, c.plan.time, c.baseline.length, c.baseline.time,
                   c.lower_bound.length, c.lower_bound.time)
         total = [a + b for a, b in zip(total, values, strict=True)]
-        rows.append(_row(p.spec.id, p.spec.kind, "inner" if p.definition.inner else "outer",
-                         len(p.plan.sections), len(p.normals), values))
+        row = _row(p.spec.id, p.spec.kind, "inner" if p.definition.inner else "outer",
+                   len(p.plan.sections), len(p.normals), values)
+        if wide and o is not None:
+            row += f"  {orientation_label(o.orientation):<10} {o.stylus.label:<8}"
+        rows.append(row)
     rows.append(_row("total", "", "", sum(len(p.plan.sections) for p in plans),
                      sum(len(p.normals) for p in plans), tuple(total)))
     return "\n".join(rows) + "\n"
