@@ -80,18 +80,21 @@ def forced_stylus(feature: RevolvedSpec) -> str | None:
 
 def approaches(owner: Any, part: Part) -> list[ir.Vec3]:
     """The approach directions of a recognised feature, best first: along its axis out
-    of each open end (a point :data:`OPEN_PROBE` beyond the end on the axis is out of
-    material), the more upward first; both ends when the model has no solid."""
+    of each end.  A bore's end must be open (a point :data:`OPEN_PROBE` beyond it on the
+    axis out of material; both ends when the model has no solid); a boss, a shaft or a
+    fillet is approached beside its surface, so both ends are tried (the planner and the
+    collision check decide), the open ones first.  Then the more upward first."""
     axis = np.asarray(owner.axis, dtype=np.float64)
     low, high = owner.extent
-    out: list[tuple[float, ir.Vec3]] = []
+    out: list[tuple[bool, float, ir.Vec3]] = []
     for sign, end in ((1.0, high), (-1.0, low)):
         beyond = np.asarray(owner.centre_at(end)) + sign * OPEN_PROBE * axis
-        if part.exact.inside(beyond) is True:
+        closed = part.exact.inside(beyond) is True
+        if closed and owner.inner:
             continue
         a = tuple(float(sign * v) for v in axis)
-        out.append((-a[2], a))  # type: ignore[arg-type]
-    return [a for _, a in sorted(out, key=lambda t: t[0])]
+        out.append((closed, -a[2], a))  # type: ignore[arg-type]
+    return [a for *_, a in sorted(out, key=lambda t: t[:2])]
 
 
 def reorientable(owner: Any, machine: MachineProfile) -> bool:
