@@ -383,3 +383,19 @@ def test_all_revolved_reaches_every_side(loaded: cad.Part) -> None:
     _, plain_notes = all_revolved_spec(loaded, plain)
     assert any("not along the probe: needs an orientation or a setup" in n
                for n in plain_notes)
+
+
+def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) -> None:
+    from types import SimpleNamespace
+
+    from probegen.planning.left_out import revolved_left_out, smallest_stylus
+    from probegen.planning.revolved_spec import smallest_bore
+
+    machine = profile("head")
+    least = smallest_bore(machine.with_stylus(smallest_stylus(machine)))
+    assert least == pytest.approx(2.0 * (0.5 + 0.15 + 0.25))  # ball + 1.5 margins + core
+    bore = SimpleNamespace(id=9, type="cylinder", inner=True, radius=0.4, minor_radius=None,
+                           faces=(40,), axis=(1.0, 0.0, 0.0))
+    assert revolved_left_out(bore, loaded, machine, "", least) == (
+        "R9 bore D0.800 (cylinder, faces 40): bore D0.800: the smallest stylus D1 (ball "
+        "D1.000) needs D1.800 or more: a smaller stylus")
