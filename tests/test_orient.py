@@ -12,6 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen import cad, ir
 from probegen.cad import part as part_module
@@ -399,3 +402,40 @@ def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) 
     assert revolved_left_out(bore, loaded, machine, "", least) == (
         "R9 bore D0.800 (cylinder, faces 40): bore D0.800: the smallest stylus D1 (ball "
         "D1.000) needs D1.800 or more: a smaller stylus")
+
+
+@settings(max_examples=examples(200))
+@given(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.floats(-1.0, 1.0))
+def test_orientation_of_any_direction(x: float, y: float, z: float) -> None:
+    """Any approach direction: the head's angles give it back, and the orientation is on
+    the grid with its frame's Z along it, or a reason."""
+    n = math.sqrt(x * x + y * y + z * z)
+    if n < 1e-3:
+        return
+    a = (x / n, y / n, z / n)
+    big_a, big_b = head_angles(a)
+    assert 0.0 <= big_a <= 180.0 and -180.0 < big_b <= 180.0
+    if math.hypot(a[0], a[1]) > 1e-6:
+        assert np.allclose(head_direction(big_a, big_b), a, atol=1e-9)
+    for kind in ("head", "tilt"):
+        o = orientation_for(profile(kind), a)
+        if isinstance(o, str):
+            assert "needs a setup" in o or "add the B range" in o
+            continue
+        z_axis = np.asarray(o.rotation)[:, 2]
+        assert np.allclose(z_axis, a, atol=1e-9)
+        if o.head is not None:
+            assert all(abs(v / 7.5 - round(v / 7.5)) < 1e-9 for v in o.head)
+
+
+@settings(max_examples=examples(60))
+@given(st.lists(st.tuples(st.sampled_from("ABC"), st.sampled_from("VXYZ")), min_size=1,
+                max_size=5, unique=True))
+def test_group_order_is_optimal(groups: list[tuple[str, str]]) -> None:
+    import itertools
+
+    start = ("A", "V")
+    order = order_groups(groups, start, "V")
+    assert sorted(order) == sorted(groups)
+    best = min(sum(changes(o, start, "V")) for o in itertools.permutations(groups))
+    assert sum(changes(order, start, "V")) == best
