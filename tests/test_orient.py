@@ -439,3 +439,15 @@ def test_group_order_is_optimal(groups: list[tuple[str, str]]) -> None:
     assert sorted(order) == sorted(groups)
     best = min(sum(changes(o, start, "V")) for o in itertools.permutations(groups))
     assert sum(changes(order, start, "V")) == best
+
+
+def test_a_work_offset_update_from_a_turned_feature_is_refused(model: Path,
+                                                               loaded: cad.Part) -> None:
+    from probegen.spec.actions import Actions, WorkOffsetAction
+
+    spec = spec_of(model, profile("head"), [FACES["+X"]])
+    feature = replace(spec.features[0], actions=Actions(  # type: ignore[type-var]
+        work_offset=WorkOffsetAction("G54", "XY")))
+    with pytest.raises(PlanningError, match=r"found a feature measured in a turned frame "
+                                            r"\(A90BM90\)"):
+        plan_program(replace(spec, features=(feature,)), runtime_variables=True, part=loaded)

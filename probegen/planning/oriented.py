@@ -149,6 +149,11 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         except ProbegenError as exc:
             errors.append(exc)
             continue
+        if feature.actions.work_offset is not None or feature.actions.align is not None:
+            raise PlanningError(f"{feature.where}: update_work_offset and align are computed "
+                                "in work X and Y, found a feature measured in a turned frame "
+                                f"({orient_name(o, 1)}): measure it from above or drop the "
+                                "action")
         return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
     if errors:
         raise errors[0]
