@@ -14,18 +14,31 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Hashable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any, TypeVar, cast
 
+import numpy as np
 import trimesh
+from build123d import Compound
+from OCP.Bnd import Bnd_Box
+from OCP.BRepBndLib import BRepBndLib
+from OCP.gp import gp_Trsf
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS, TopoDS_Face
 
 from probegen.cad.exact import ExactFaces
-from probegen.cad.faces import FaceRecord, Model, Vec3
+from probegen.cad.faces import FaceRecord, Model, Vec3, _vec3, _xyz
 from probegen.cad.loading import load_step
 from probegen.cad.mesh import CHORDAL_TOLERANCE, tessellate
 
 T = TypeVar("T")
+Rotation = tuple[Vec3, Vec3, Vec3]
+"""A rotation as rows (``probegen.ir.frames``): its columns are a frame's X, Y, Z axes in
+work coordinates."""
+TURN_KEY_DECIMALS = 9
+"""A turned part is kept per rotation rounded to this many decimals (two rotations that
+agree to 1e-9 are one frame)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,6 +54,7 @@ class Part:
 
     model: Model
     _memo: dict[Hashable, Any] = field(default_factory=dict, init=False, repr=False)
+    _turn: tuple[Part, Rotation] | None = field(default=None, repr=False)
 
     @property
     def path(self) -> str:
@@ -74,8 +88,42 @@ class Part:
 
     def mesh(self, tolerance: float = CHORDAL_TOLERANCE) -> trimesh.Trimesh:
         """The triangle mesh at chordal ``tolerance`` (mm), tessellated once per tolerance
-        (:func:`probegen.cad.tessellate`).  Shared: copy it before changing it."""
+        (:func:`probegen.cad.tessellate`); a turned part's is the original part's mesh
+        turned (no second tessellation).  Shared: copy it before changing it."""
+        if self._turn is not None:
+            base, rotation = self._turn
+            return self.memo(("mesh", tolerance),
+                             lambda: _turned_mesh(base.mesh(tolerance), rotation))
         return self.memo(("mesh", tolerance), lambda: tessellate(self.model, tolerance))
+
+    @property
+    def rotation(self) -> Rotation | None:
+        """The rotation of a turned part's frame (:meth:`turned`); None for a part as
+        loaded."""
+        return None if self._turn is None else self._turn[1]
+
+    @property
+    def original(self) -> Part:
+        """The part as loaded (a turned part's original; the part itself otherwise)."""
+        return self if self._turn is None else self._turn[0]
+
+    def turned(self, rotation: Rotation) -> Part:
+        """The same model in the frame of ``rotation``: every coordinate is
+        ``p_frame = Rᵀ·p_work`` (:mod:`probegen.ir.frames`: the frame's +Z is the probe's
+        tool axis), face ids unchanged.
+
+        Kept on the original part per rotation (rounded to :data:`TURN_KEY_DECIMALS`):
+        its mesh is the original mesh turned (no second tessellation), its exact queries
+        run on the OCP shape moved by a location (no copy of the geometry), its face
+        records are the original ones turned, each face's box taken again on the moved
+        face (an axis-aligned box does not turn).  A turned part's own :meth:`turned`
+        turns the original (the rotation is always from work coordinates).
+        """
+        base = self.original
+        key = ("turned", tuple(round(x, TURN_KEY_DECIMALS) + 0.0
+                               for row in rotation for x in row))
+        return base.memo(key, lambda: Part(_turned_model(base.model, rotation),
+                                           _turn=(base, rotation)))
 
     def memo(self, key: Hashable, build: Callable[[], T]) -> T:
         """The value kept under ``key``, built by ``build()`` the first time.
@@ -87,6 +135,51 @@ class Part:
         if key not in self._memo:
             self._memo[key] = build()
         return cast(T, self._memo[key])
+
+
+def _transpose_trsf(rotation: Rotation) -> gp_Trsf:
+    """The OCCT transformation ``p -> Rᵀ·p``."""
+    r = rotation
+    trsf = gp_Trsf()
+    trsf.SetValues(r[0][0], r[1][0], r[2][0], 0.0, r[0][1], r[1][1], r[2][1], 0.0,
+                   r[0][2], r[1][2], r[2][2], 0.0)
+    return trsf
+
+
+def _turn(rotation: Rotation, v: Vec3) -> Vec3:
+    """``Rᵀ·v``."""
+    return _vec3(np.asarray(v, dtype=np.float64) @ np.asarray(rotation, dtype=np.float64))
+
+
+def _turned_model(model: Model, rotation: Rotation) -> Model:
+    """``model`` in the frame of ``rotation`` (see :meth:`Part.turned`)."""
+    location = TopLoc_Location(_transpose_trsf(rotation))
+    faces = tuple(TopoDS.Face(face.Moved(location)) for face in model._topo_faces)
+    records = tuple(_turned_record(record, face, rotation)
+                    for record, face in zip(model.faces, faces, strict=True))
+    corners = np.array([(*r.bbox_min, *r.bbox_max) for r in records])
+    lo, hi = _vec3(corners[:, :3].min(axis=0)), _vec3(corners[:, 3:].max(axis=0))
+    shape = Compound(model._shape.wrapped.Moved(location))
+    return Model(model.path, records, lo, hi, shape, faces, model.warnings)
+
+
+def _turned_record(record: FaceRecord, face: TopoDS_Face, rotation: Rotation) -> FaceRecord:
+    """A face record turned: points and directions by ``Rᵀ``, sizes and sides kept, the
+    box taken on the moved face (exact geometry, as :func:`probegen.cad.faces._record`)."""
+    box = Bnd_Box()
+    BRepBndLib.AddOptimal_s(face, box, False, False)
+    return replace(record, origin=_turn(rotation, record.origin),
+                   axis=_turn(rotation, record.axis), centre=_turn(rotation, record.centre),
+                   bbox_min=_xyz(box.CornerMin()), bbox_max=_xyz(box.CornerMax()))
+
+
+def _turned_mesh(mesh: trimesh.Trimesh, rotation: Rotation) -> trimesh.Trimesh:
+    """``mesh`` with every vertex ``v`` moved to ``Rᵀ·v``, its triangles and their face ids
+    kept."""
+    vertices = np.asarray(mesh.vertices) @ np.asarray(rotation, dtype=np.float64)
+    turned = trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False)
+    turned.metadata["face_ids"] = mesh.metadata["face_ids"]
+    return turned
 
 
 def load_part(path: str | os.PathLike[str]) -> Part:

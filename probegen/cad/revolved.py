@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from OCP.Bnd import Bnd_Box
@@ -64,8 +64,10 @@ from probegen.cad.revolved_records import (
     _vec3,
 )
 from probegen.cad.revolved_sections import (
+    VERTICAL,
     _Queries,
     _queries,
+    _reach,
     _section,
     default_axials,
     section_arcs,
@@ -244,12 +246,21 @@ def _recognise(part: Part) -> tuple[RevolvedFeature, ...]:
             for group in _surface_groups(surfaces)
             for faces, low, high in _axial_clusters(model, group)]
     runs.sort(key=lambda run: min(run[1]))
-    return tuple(_feature(queries, index, *run) for index, run in enumerate(runs, start=1))
+    turned = part.rotation is not None  # only its vertical features are measured there
+    return tuple(_feature(queries, index, *run, sections=not turned or _vertical(run[0].axis))
+                 for index, run in enumerate(runs, start=1))
+
+
+def _vertical(axis: Vec3) -> bool:
+    """Whether ``axis`` is along ±Z (:data:`probegen.cad.revolved_sections.VERTICAL`)."""
+    return math.hypot(axis[0], axis[1]) <= VERTICAL
 
 
 def _feature(queries: _Queries, index: int, ref: _Surface, faces: list[int], low: float,
-             high: float) -> RevolvedFeature:
-    """Assemble one feature from its reference surface and its run of faces."""
+             high: float, *, sections: bool = True) -> RevolvedFeature:
+    """Assemble one feature from its reference surface and its run of faces; without
+    ``sections`` (a feature not along Z of a turned part) no section is built and the
+    feature is not accessible, with the reason of its axis."""
     origin, radius, extent = ref.origin, ref.radius, (low, high)
     if ref.type in ("cylinder", "cone"):
         origin = _vec3(np.add(ref.origin, low * np.asarray(ref.axis)))
@@ -260,14 +271,17 @@ def _feature(queries: _Queries, index: int, ref: _Surface, faces: list[int], low
         inner=ref.inner, radius=radius, minor_radius=ref.minor, half_angle=ref.half,
         tube_side=ref.side, extent=extent, sections=(), accessible=False, reason="",
     )  # fmt: skip
-    sections = tuple(_section(queries, bare, h) for h in default_axials(ref.type, extent))
-    reachable = [s for s in sections if s.reachable]
-    reason = "" if reachable else (sections[0].reason if sections else "no section")
+    if not sections:
+        reason = _reach(queries, ref.axis, ref.inner, np.asarray(origin))
+        return replace(bare, reason=reason)
+    built = tuple(_section(queries, bare, h) for h in default_axials(ref.type, extent))
+    reachable = [s for s in built if s.reachable]
+    reason = "" if reachable else (built[0].reason if built else "no section")
     return RevolvedFeature(
         id=bare.id, type=bare.type, faces=bare.faces, origin=bare.origin, axis=bare.axis,
         inner=bare.inner, radius=bare.radius, minor_radius=bare.minor_radius,
         half_angle=bare.half_angle, tube_side=bare.tube_side, extent=bare.extent,
-        sections=sections, accessible=bool(reachable), reason=reason,
+        sections=built, accessible=bool(reachable), reason=reason,
     )  # fmt: skip
 
 

@@ -238,7 +238,7 @@ def _plan(args: argparse.Namespace) -> int:
         part = part_of(spec)
     planned = plan_program(spec, runtime_variables=True, part=part)
     if planned.revolved or not planned.freeform:
-        sys.stdout.write(metrics_table(planned.revolved, spec.machine))
+        sys.stdout.write(metrics_table(planned.revolved, spec.machine, planned.oriented))
     for p in planned.sphere_tests:
         print(f"{p.feature.id}: sphere probing test (ISO 10360-5), {len(p.directions)} points: "
               "not compared")
@@ -256,6 +256,9 @@ def _plan(args: argparse.Namespace) -> int:
         print(f"tour with travel: {f.plan.length:.1f} mm {f.plan.time:.1f} s; baseline "
               f"{f.baseline.length:.1f} mm {f.baseline.time:.1f} s; lower bound "
               f"{f.lower_bound.length:.1f} mm {f.lower_bound.time:.1f} s")
+    if planned.stylus_changes or planned.orientation_changes:
+        print(f"changes: {planned.stylus_changes} of stylus, {planned.orientation_changes} "
+              "of orientation (the returns to the first stylus and the vertical included)")
     print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
           f"clearance above the margin {planned.clearance.minimum:.3f} mm")
     if args.all_revolved and not planned.revolved:

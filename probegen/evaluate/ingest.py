@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -52,6 +52,7 @@ from probegen.evaluate.run_identity import (
 from probegen.evaluate.sphere_test import SphereTestResult, evaluate_sphere_test
 from probegen.geometry.fits_solver import vec3
 from probegen.geometry.uncertainty import Budget, few_dof_note
+from probegen.ir import frames
 from probegen.machine.calibration import ProbeCalibration, calibration_state, compensate, for_stylus
 from probegen.results import DmisOutput, DprntLog, read_dmis_output
 from probegen.results.dprnt import log_lines, parse_dprnt, read_raw
@@ -283,10 +284,11 @@ def ingest(log_path: str | Path, spec: Spec, *,
     gaps = _Gaps(log, touches)
     budget = budget_of(spec, calibration)
     outcomes: list[Outcome] = []
+    oriented = {o.plan.spec.id: o for o in planned.oriented}
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            outcomes.append(_revolved(feature, spec, part, touches, notes, gaps, budget,
-                                     calibration))
+            outcomes.append(_revolved(feature, spec, oriented[feature.id], touches, notes,
+                                      gaps, budget, calibration))
         elif isinstance(feature, FreeformSpec):
             outcomes.append(ingest_freeform(feature, spec, part, touches, notes, calibration,
                                             gaps))
@@ -498,20 +500,29 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec, part: Part | None = Non
     return tuple(found), tuple(notes)
 
 
-def _revolved(feature: RevolvedSpec, spec: Spec, part: Part | None, touches: Touches,
+def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches,
               notes: list[str], gaps: _Gaps, budget: Budget,
               calibration: ProbeCalibration | None = None) -> Outcome:
     """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
-    without contact, too few to fit, or a failed fit)."""
-    from probegen.planning.revolved_spec import plan_revolved
+    without contact, too few to fit, or a failed fit).
 
-    plan = plan_revolved(feature, part, spec.machine, spec.clearance_z)
+    ``oriented`` is the feature's plan in the re-planned program
+    (``planning.oriented.OrientedPlan``): a feature measured in a turned frame has its
+    plan there and the control printed its touches there (#5061-#5063 under G68.2), so
+    the nominal and the touches are turned back to work coordinates with the frame's
+    rotation (:mod:`probegen.ir.frames`); the ball is that of the feature's stylus (the
+    calibration's radius only for the ``[probe]`` stylus).
+    """
+    plan, rotation = oriented.plan, oriented.orientation.rotation
+    if oriented.stylus != spec.machine.stylus:
+        calibration = None
+    ball = oriented.stylus.ball_radius if calibration is None else calibration
     indices = sorted(plan.normals)
     found = [k for k in indices if (feature.id, k) in touches]
     missing = sorted(set(indices) - set(found))
     if missing:
         notes.append(f"feature {feature.id}: no touch for points {ranges(missing)}")
-    nominal = nominal_of(plan)
+    nominal = nominal_in_work(nominal_of(plan), rotation)
     names = _revolved_names(feature, len(nominal.sections))
     reason = gaps.reason(feature.id, indices)
     least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
@@ -522,9 +533,9 @@ def _revolved(feature: RevolvedSpec, spec: Spec, part: Part | None, touches: Tou
                      f"{f', in {sections} sections' if sections > 1 else ''})")
         return _judge(feature.id, feature.kind, reason, names, None)
     outcome = _judge(feature.id, feature.kind, reason, names, lambda: evaluate_revolved(
-        feature.id, nominal, [touches[(feature.id, k)] for k in found], which,
-        ball_radius=spec.machine.probe.ball_radius if calibration is None else calibration,
-        limits=feature.tolerance, budget=budget))
+        feature.id, nominal, [frames.apply(rotation, touches[(feature.id, k)])
+                              for k in found], which,
+        ball_radius=ball, limits=feature.tolerance, budget=budget))
     if isinstance(outcome, NotEvaluated) and outcome.partial is None:
         notes.append(f"feature {feature.id}: not evaluated: {outcome.reason}")
     found_fit = outcome.partial if isinstance(outcome, NotEvaluated) else outcome
@@ -547,6 +558,16 @@ def _revolved_names(feature: RevolvedSpec, sections: int
                    ("ANGLE", t.angle if kind == "cone" else None), *per_section,
                    ("TAPER", _sym(t.taper) if kind == "cylinder" else None),
                    ("FORM", _upper(t.form)))
+
+
+def nominal_in_work(nominal: Nominal, rotation: frames.Rotation) -> Nominal:
+    """A nominal planned in the frame of ``rotation`` (``p_work = R·p_frame``) in work
+    coordinates; unchanged for the identity."""
+    if frames.is_identity(rotation):
+        return nominal
+    sections = tuple((frames.apply(rotation, c), d) for c, d in nominal.sections)
+    return replace(nominal, centre=frames.apply(rotation, nominal.centre),
+                   axis=frames.apply(rotation, nominal.axis), sections=sections)
 
 
 def nominal_of(plan: Any) -> Nominal:

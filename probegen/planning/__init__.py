@@ -9,7 +9,7 @@ a plain flag so that planning never imports the dialects.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -23,14 +23,16 @@ from probegen.planning.actions import (
     revolved_check,
     sphere_offset,
 )
-from probegen.planning.collision import ClearanceReport, check_program, obstacle_for
+from probegen.planning.collision import ClearanceReport, Obstacle, check_program, obstacle_for
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.identity import program_identity
 from probegen.planning.order import Stop, Tour, order_stops
+from probegen.planning.oriented import OrientedPlan, grouped_nodes, plan_oriented
 from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import Comparison
-from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
+from probegen.planning.revolved_metrics import Figures
+from probegen.planning.revolved_spec import RevolvedPlan
 from probegen.planning.setup import calibration_header, make_setup, part_of, setup_for
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
 from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
@@ -69,6 +71,12 @@ class PlannedProgram:
     tour: Tour | None = None
     figures: Comparison | None = None
     freeform: tuple[FreeformPlan, ...] = ()
+    oriented: tuple[OrientedPlan, ...] = ()
+    """The revolved features in measuring order with their orientation and stylus."""
+    stylus_changes: int = 0
+    """``SelectStylus`` nodes of the program (the return to the first stylus included)."""
+    orientation_changes: int = 0
+    """``Orient`` nodes of the program (the return to the vertical included)."""
 
 
 def plan_program(spec: Spec, *, runtime_variables: bool,
@@ -102,13 +110,14 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
     revolved: list[RevolvedPlan] = []
+    oriented: list[OrientedPlan] = []
     checked: list[tuple[RevolvedSpec | PlanarSpec, ir.Check]] = []
     spheres: list[ir.SetWorkOffset] = []
     freeform: list[FreeformPlan] = []
     setup = make_setup(spec)
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
-            revolved.append(plan_revolved(feature, part, machine, spec.clearance_z))
+            oriented.append(plan_oriented(feature, part, machine, spec.clearance_z))
         elif isinstance(feature, FreeformSpec):
             freeform.append(plan_freeform(feature, part, machine, setup))
         elif isinstance(feature, PlanarSpec):
@@ -134,15 +143,21 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
             progress(1)
     tour = figures = None
     obstacle = obstacle_for(part, [p.sphere for p in plans])
-    if revolved:
-        stops = [stop_of(r) for r in revolved]
-        linker = Linker(Sweeper(obstacle, machine, machine.probe.ball_radius), stops,
-                        spec.clearance_z)
-        tour = order_stops(stops, clearance_z=spec.clearance_z, route=linker.route)
-        revolved = [revolved[k] for k in tour.order]
-        nodes = linked_nodes(revolved, machine, spec.clearance_z, linker)
-        figures = tour_figures(revolved, nodes, machine, spec.clearance_z)
-        body += _with_checks(nodes, {r.spec.id: r for r in revolved}, machine, checked)
+    grouped = None
+    if oriented:
+        tours: list[tuple[Tour, Comparison]] = []
+
+        def lay_out(members: Sequence[OrientedPlan]
+                    ) -> tuple[list[ir.Node], list[OrientedPlan]]:
+            nodes, order, done = _tour(members, machine, checked,
+                                       obstacle if members[0].part is part else None)
+            tours.append(done)
+            return nodes, [members[k] for k in order]
+
+        grouped = grouped_nodes(oriented, machine, spec.clearance_z, lay_out)
+        revolved = [p.plan for p in grouped.plans]
+        tour, figures = _combined(tours)
+        body += grouped.nodes
     if freeform:
         order = order_stops([Stop(f.entry, f.exit) for f in freeform],
                             clearance_z=spec.clearance_z).order
@@ -151,10 +166,58 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     body += final_actions(checked, setup.work_offset, spheres)
     program = ir.Program(setup, tuple(body))
     program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
-    report = (check_program(program, obstacle, plans, machine, progress=progress)
+    report = (check_program(program, obstacle, plans, machine, progress=progress, part=part)
               if check_collisions else ClearanceReport(()))
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,
-                          tuple(freeform))
+                          tuple(freeform), grouped.plans if grouped else (),
+                          grouped.stylus_changes if grouped else 0,
+                          grouped.orientation_changes if grouped else 0)
+
+
+def _tour(members: Sequence[OrientedPlan], machine: MachineProfile,
+          checked: list[tuple[RevolvedSpec | PlanarSpec, ir.Check]],
+          obstacle: Obstacle | None) -> tuple[list[ir.Node], tuple[int, ...],
+                                              tuple[Tour, Comparison]]:
+    """One (stylus, orientation) group's tour, as every program's revolved features were
+    toured before there were groups: ordered with clear links at the group's frame
+    clearance, with its checks; the nodes, the order (indices of ``members``) and the
+    figures.  ``obstacle``: the part's (the identity group's, built with the spheres),
+    else the turned part's."""
+    first = members[0]
+    m = machine if first.stylus == machine.stylus else machine.with_stylus(first.stylus)
+    clear = first.clearance_z
+    if obstacle is None:
+        obstacle = obstacle_for(first.part, [])
+    revolved = [p.plan for p in members]
+    stops = [stop_of(r) for r in revolved]
+    linker = Linker(Sweeper(obstacle, m, m.probe.ball_radius), stops, clear)
+    tour = order_stops(stops, clearance_z=clear, route=linker.route)
+    revolved = [revolved[k] for k in tour.order]
+    nodes = linked_nodes(revolved, m, clear, linker)
+    figures = tour_figures(revolved, nodes, m, clear)
+    out = _with_checks(nodes, {r.spec.id: r for r in revolved}, m, checked)
+    return out, tour.order, (tour, figures)
+
+
+def _combined(tours: Sequence[tuple[Tour, Comparison]]) -> tuple[Tour, Comparison]:
+    """The tours of the groups as one: one group's as it is, else the orders one after
+    the other and the lengths and times summed (the moves of each orientation or stylus
+    change are not in them)."""
+    if len(tours) == 1:
+        return tours[0]
+    order: list[int] = []
+    nearest: list[int] = []
+    for t, _ in tours:
+        order += [len(order) + k for k in t.order]
+        nearest += [len(nearest) + k for k in t.nearest]
+
+    def total(pick: Callable[[Comparison], Figures]) -> Figures:
+        return Figures(sum(pick(c).length for _, c in tours), sum(pick(c).time for _, c in tours))
+
+    tour = Tour(tuple(order), sum(t.length for t, _ in tours), tuple(nearest),
+                sum(t.nearest_length for t, _ in tours))
+    return tour, Comparison(total(lambda c: c.plan), total(lambda c: c.baseline),
+                            total(lambda c: c.lower_bound))
 
 
 def _with_checks(nodes: list[ir.Node], plans: dict[str, RevolvedPlan],

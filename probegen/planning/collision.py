@@ -41,6 +41,7 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
+from probegen.planning.orient import LEVEL_SLACK, index_point, over_point, to_frame, to_work
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -323,12 +324,18 @@ class _Walker:
 
 def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                   machine: MachineProfile, *,
-                  progress: Callable[[int], None] | None = None) -> ClearanceReport:
+                  progress: Callable[[int], None] | None = None,
+                  part: Part | None = None) -> ClearanceReport:
     """Check every move of ``program``; raise ``CollisionError`` at the first bad one.
 
     ``plans`` are the located features: :class:`Located` records or sphere-test plans
     (their id, nominal centre and locate uncertainty); features set up by the work
     offset (revolved features) need none.
+
+    After an ``ir.Orient`` the nodes are checked in its frame against ``part`` turned
+    (``part`` is needed then), and the orientation change itself as moves
+    (:func:`orientation_change`); after an ``ir.SelectStylus`` with that stylus, the
+    change checked where it is taken (:func:`stylus_change`).
     """
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -344,6 +351,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
 
     inside = getattr(obstacle, "inside", None)
     outside: set[tuple[float, float, float]] = set()
+    frame: ir.Orient | None = None
+    entering = False
 
     def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str,
               touch: bool = False) -> None:
@@ -365,7 +374,31 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     for node in ir.walk(program.body):
         if progress is not None:
             progress(1)
-        if isinstance(node, ir.FeatureBlock):
+        if isinstance(node, ir.Orient):
+            if part is None:
+                raise PlanningError(f"orientation {node.name}: the check of a turned probe "
+                                    "needs the part model, found none")
+            level = setup.clearance_z if frame is None else frame.clearance_z
+            new = obstacle_for(part.turned(node.rotation), [])
+            if pos is not None:
+                index = index_point(part, frame, pos, level, node, stylus, machine)
+                check(pos, to_frame(frame, index), 0.0, 0.0,
+                      f"up to the index point of {node.name}")
+                obstacle, inside, outside = new, getattr(new, "inside", None), set()
+                pos = to_frame(node, index)
+                entering = True
+            obstacle, inside, frame = new, getattr(new, "inside", None), node
+        elif isinstance(node, ir.SelectStylus):
+            level = setup.clearance_z if frame is None else frame.clearance_z
+            if pos is not None and pos[2] < level - LEVEL_SLACK:
+                raise CollisionError(f"stylus change to {node.label}: the probe is at "
+                                     f"z = {pos[2]:.3f}, expected the clearance level "
+                                     f"{level:.3f} or above")
+            stylus = Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
+            r = stylus.ball
+            if pos is not None:
+                check(pos, pos, 0.0, 0.0, f"stylus change to {node.label}")
+        elif isinstance(node, ir.FeatureBlock):
             feature = node.feature.id
         elif w.follow(node):
             pass
@@ -375,8 +408,17 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 if touch_start is None or not np.allclose(target, touch_start, atol=1e-9):
                     raise PlanningError(f"feature {feature}: a retract must return to the "
                                         f"start of its touch, found {fmt(target)}")
+            elif pos is not None and entering and frame is not None:
+                if target[2] < frame.clearance_z - LEVEL_SLACK:
+                    raise PlanningError(f"orientation {frame.name}: the first move after it "
+                                        f"goes to frame z = {target[2]:.3f}, expected its "
+                                        f"clearance level {frame.clearance_z:.3f}")
+                over = to_frame(frame, over_point(to_work(frame, pos), to_work(frame, target)))
+                check(pos, over, 0.0, 0.0, f"from the index point of {frame.name}")
+                check(over, target, 0.0, extra, node.mode.value)
             elif pos is not None:
                 check(pos, target, pos_extra, extra, node.mode.value)
+            entering = False
             pos, pos_extra, touch_start = target, extra, None
         elif isinstance(node, ir.Touch):
             feature = node.feature

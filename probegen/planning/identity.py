@@ -19,7 +19,9 @@ def planned_touches(program: ir.Program, plans: Sequence[Any] = ()) -> tuple[Pla
     ``plans`` are the located features (see :func:`probegen.planning.collision.located`):
     their uncertainty goes to every touch placed from a run-time value or a local frame.
     After an ``ir.Rotary`` the points are those the control reports, the ball centre less
-    the head shift (the dialects command and print that point).
+    the head shift (the dialects command and print that point).  After an ``ir.Orient``
+    they stay in its frame, as a control under G68.2 prints them (``#5061``-``#5063``);
+    after an ``ir.SelectStylus`` they are the ball centres of that stylus.
     """
     r = program.setup.ball_diameter / 2.0
     w = _Walker(plans, r)
@@ -28,6 +30,8 @@ def planned_touches(program: ir.Program, plans: Sequence[Any] = ()) -> tuple[Pla
     for node in ir.walk(program.body):
         if isinstance(node, ir.Rotary):
             shift = np.array(node.head_shift)
+        elif isinstance(node, ir.SelectStylus):
+            r = node.ball_diameter / 2.0
         elif w.follow(node):
             pass
         elif isinstance(node, ir.Touch):

@@ -17,7 +17,7 @@ import re
 from typing import TYPE_CHECKING, Any
 
 from probegen import ir
-from probegen.machine.profile import MachineProfile
+from probegen.machine.profile import MachineProfile, Stylus
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -50,7 +50,6 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
     reason (not accessible) or the planner's message (it does not plan, or collides);
     ``least`` the smallest bore diameter the stylus takes, mm
     (:func:`probegen.planning.revolved_spec.smallest_bore`)."""
-    ball = 2.0 * machine.probe.ball_radius
     head = f"R{f.id} {describe(f)} ({f.type}, faces {','.join(map(str, f.faces))})"
     reasons = []
     if f.type not in ("cylinder", "cone", "sphere", "torus"):
@@ -58,27 +57,42 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
     from probegen.cad.revolved_sections import VERTICAL
 
     tilt = math.degrees(math.acos(min(1.0, abs(f.axis[2]))))
-    if math.hypot(f.axis[0], f.axis[1]) > VERTICAL:
+    turns = (machine.head is not None or machine.tilt is not None) and f.type != "sphere"
+    if math.hypot(f.axis[0], f.axis[1]) > VERTICAL and not turns:
         reasons.append(f"axis ({f.axis[0]:.4f}, {f.axis[1]:.4f}, {f.axis[2]:.4f}) is "
                        f"{tilt:.1f} deg from Z, not along the probe: needs an orientation "
                        "or a setup")
     if f.inner and f.type == "cylinder" and 2.0 * f.radius < least:
-        reasons.append(f"bore D{2.0 * f.radius:.3f}: the stylus ball D{ball:.3f} needs "
+        reasons.append(f"bore D{2.0 * f.radius:.3f}: {_smallest_text(machine)} needs "
                        f"D{least:.3f} or more: a smaller stylus")
     if reasons:
         return f"{head}: {'; '.join(reasons)}"
     return f"{head}: {_planning_reason(f, part, machine, problem, least)}"
 
 
+def smallest_stylus(machine: MachineProfile) -> Stylus:
+    """The stylus of the profile with the smallest ball (the first of equals)."""
+    styli = machine.styli()
+    return min(styli, key=lambda s: s.ball_diameter)
+
+
+def _smallest_text(machine: MachineProfile) -> str:
+    """``the stylus ball D6.000`` (no rack), ``the smallest stylus D1 (ball D1.000)``."""
+    s = smallest_stylus(machine)
+    if not machine.rack:
+        return f"the stylus ball D{s.ball_diameter:.3f}"
+    return f"the smallest stylus {s.label} (ball D{s.ball_diameter:.3f})"
+
+
 def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
                      least: float) -> str:
     """The reason of an accessible feature that does not plan or collides."""
-    r, m = machine.probe.ball_radius, machine.margin
+    r, m = smallest_stylus(machine).ball_radius, machine.margin
     if "closed above" in problem:
         return f"{_after(problem, 'closed above')}: reach it from below: needs a setup"
     if "expected R > r + d" in problem:
-        return (f"{describe(f)} is too small where it is measured: the stylus ball "
-                f"D{2.0 * r:.3f} needs D{least:.3f} or more: a smaller stylus")
+        return (f"{describe(f)} is too small where it is measured: "
+                f"{_smallest_text(machine)} needs D{least:.3f} or more: a smaller stylus")
     arcs = _ARCS.search(problem)
     if arcs:
         longest = max(float(a) for a in arcs[2].split(", "))

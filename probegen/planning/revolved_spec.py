@@ -1,334 +1,45 @@
-"""Revolved features of a spec (method M2 wired): resolve, plan, IR.
-
-A spec feature of kind ``circle``, ``cylinder``, ``cone`` or ``sphere`` names a model
-face (``face = N`` or ``at = [x, y, z]``); it is resolved to the recognised revolved
-feature (:func:`probegen.cad.revolved.revolved_features`) whose faces hold that face.
-Sections are given as depths below the feature's top end, along -Z (accessible
-features have vertical axes), and sorted top first; without ``sections`` the
-recognised default sections are used (a circle: one, at the middle of the extent).
-
-The part is assumed set up by its work offset: no locating, no run-time variables, and
-the collision check adds no position uncertainty.
+"""Revolved features of a spec: what serves the whole spec (``--all-revolved``: a spec
+feature for every recognised feature some orientation reaches, each checked alone; the
+metrics table), with the planning of one feature re-exported from
+:mod:`probegen.planning.revolved_plan` (resolve, plan, IR) and
+:mod:`probegen.planning.oriented` (the orientation and the stylus).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterator
-from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from probegen import ir
-from probegen.errors import CollisionError, ModelError, PlanningError, ProbegenError, SpecError
+from probegen.errors import CollisionError, ModelError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
-from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
-from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.orient import orientation_for, orientation_label
+from probegen.planning.oriented import OrientedPlan, approaches, plan_oriented, reorientable
+from probegen.planning.revolved_plan import (
+    ALTERNATIVE_SECTIONS,
+    DEFAULT_SECTIONS,
+    TYPE_OF_KIND,
+    ResolvedRevolved,
+    RevolvedPlan,
+    definition,
+    find_owner,
+    plan_revolved,
+    resolve_revolved,
+    revolved_nodes,
+    smallest_bore,
+    top_z,
+)
 from probegen.planning.setup import make_setup
 from probegen.spec.model import RevolvedSpec, Spec
 
 if TYPE_CHECKING:
     from probegen.cad import Part
 
-TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
-                "sphere": "sphere", "torus": "torus"}
-"""The recognised surface type each revolved kind measures."""
-
-
-@dataclass(frozen=True, slots=True)
-class ResolvedRevolved:
-    """A spec feature with its recognised feature and chosen sections (``cad.revolved``
-    objects: ``RevolvedFeature`` and ``FeatureSection``s, top first)."""
-
-    spec: RevolvedSpec
-    feature: Any
-    sections: tuple[Any, ...]
-
-
-@dataclass(frozen=True, slots=True)
-class RevolvedPlan:
-    """A planned revolved feature: what it is, its M2 plan and its IR definition."""
-
-    spec: RevolvedSpec
-    resolved: ResolvedRevolved
-    plan: FeaturePlan
-    definition: ir.FeatureDef
-    notes: tuple[str, ...] = ()
-    """What the reroute changed (:mod:`probegen.planning.reroute`), one line each."""
-
-    @property
-    def normals(self) -> dict[int, tuple[float, float, float]]:
-        """The planned outward normal of each touch index."""
-        return {p.index: p.normal for p in self.plan.path if p.normal is not None}
-
-    @property
-    def section_of_touch(self) -> dict[int, int]:
-        """The 0-based section of each touch index."""
-        return {p.index: p.section for p in self.plan.path if p.normal is not None}
-
-
-def _need_part(part: Part | None, feature: RevolvedSpec) -> Part:
-    """``part``, or a SpecError for a spec without a model."""
-    if part is None:
-        raise SpecError(f"{feature.where}: kind {feature.kind} needs [part] model, found none")
-    return part
-
-
-def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolved:
-    """Find the recognised feature and its sections.
-
-    Raises:
-        SpecError: no model; a depth outside the feature.
-        ModelError: the face is not a face of a revolved feature of the right type.
-        PlanningError: the feature or a chosen section is not accessible (with the
-            recognition's reason).
-    """
-    from probegen import cad
-    from probegen.cad.revolved import revolved_features, section_at
-
-    part = _need_part(part, feature)
-    face = cad.face_by_id(part.model, feature.face) if feature.face else cad.face_at(
-        part.model, feature.at or (0.0, 0.0, 0.0))
-    found = revolved_features(part)
-    owner = next((f for f in found if face.id in f.faces), None)
-    want = TYPE_OF_KIND[feature.kind]
-    if owner is None or owner.type != want:
-        what = f"face {face.id} of type {face.type}" if owner is None else (
-            f"face {face.id} of revolved feature {owner.id}, a {owner.type}")
-        raise ModelError(f"{feature.where}: expected a face of a {want} for kind "
-                         f"{feature.kind}, found {what}")
-    if not owner.accessible:
-        raise PlanningError(f"{feature.where}: revolved feature {owner.id} ({owner.type}, "
-                            f"faces {','.join(map(str, owner.faces))}) is not accessible: "
-                            f"{owner.reason}")
-    sections: tuple[Any, ...]
-    if feature.sections is None:
-        sections = _default_sections(part, owner, feature.kind, section_at)
-    else:
-        sections = tuple(section_at(part, owner, _axial(feature, owner, k, depth))
-                         for k, depth in enumerate(feature.sections))
-    for k, s in enumerate(sections):
-        if not s.reachable:
-            raise PlanningError(f"{feature.where}.sections[{k}]: the section at "
-                                f"z = {s.centre[2]:.4f} is not accessible: {s.reason}")
-    z_sorted = tuple(sorted(sections, key=lambda s: -s.centre[2]))
-    return ResolvedRevolved(feature, owner, z_sorted)
-
-
-DEFAULT_SECTIONS = {"circle": (0.5,), "cone": (0.25, 0.75), "torus": (0.2, 0.5, 0.8)}
-"""Default sections (fractions of the axial extent) of a spec feature without
-``sections``, where the recognised ones do not serve: a circle has one, at the middle;
-a cone two (its angle needs two), a torus three at distinct tube angles (two circles
-of a torus lie on a family of tori).  Cylinders take the recognised sections; a sphere
-the recognised one and a second at 3/4 of its extent (one circle lies on many
-spheres)."""
-SPHERE_SECOND = 0.75
-
-
-def _default_sections(part: Part, owner: Any, kind: str, section_at: Any
-                      ) -> tuple[Any, ...]:
-    """The reachable default sections of ``owner`` for ``kind`` (see
-    :data:`DEFAULT_SECTIONS`); the recognised ones when none of these is reachable."""
-    low, high = owner.extent
-    recognised = tuple(s for s in owner.sections if s.reachable)
-    if kind == "cylinder":
-        return recognised
-    if kind == "sphere":
-        extra = section_at(part, owner, low + SPHERE_SECOND * (high - low))
-        return recognised + ((extra,) if extra.reachable else ())
-    chosen = tuple(s for s in (section_at(part, owner, low + q * (high - low))
-                               for q in DEFAULT_SECTIONS[kind]) if s.reachable)
-    return chosen or recognised
-
-
-def top_z(feature: Any) -> float:
-    """The highest Z of a vertical feature's extent, mm."""
-    az = feature.axis[2]
-    return max(feature.origin[2] + h * az for h in feature.extent)
-
-
-def _axial(spec: RevolvedSpec, feature: Any, k: int, depth: float) -> float:
-    """The axial position of the section ``depth`` mm below the top end."""
-    if depth > feature.length + 1e-9:
-        raise SpecError(f"{spec.where}.sections[{k}]: expected a depth from 0 to "
-                        f"{feature.length:.4f} mm (the feature's length), found {depth:g}")
-    az = feature.axis[2]
-    return (top_z(feature) - depth - feature.origin[2]) / az
-
-
-def definition(resolved: ResolvedRevolved) -> ir.FeatureDef:
-    """The nominal feature for the IR (and DMIS ``FEAT/...``)."""
-    f, fid = resolved.feature, resolved.spec.id
-    axis = tuple(float(v) for v in f.axis)
-    if resolved.spec.kind == "circle":
-        s = resolved.sections[0]
-        return ir.CircleDef(fid, s.centre, axis, 2.0 * s.radius, f.inner)  # type: ignore[arg-type]
-    if f.type == "cylinder":
-        centre = f.centre_at(sum(f.extent) / 2.0)
-        return ir.CylinderDef(fid, centre, axis, 2.0 * f.radius, f.length,  # type: ignore[arg-type]
-                              f.inner)
-    if f.type == "cone":
-        half = f.half_angle or 0.0
-        apex = f.centre_at(-f.radius / math.tan(half))
-        return ir.ConeDef(fid, apex, axis, half, f.inner)  # type: ignore[arg-type]
-    if f.type == "torus":
-        return ir.TorusDef(fid, f.origin, axis, 2.0 * f.radius,  # type: ignore[arg-type]
-                           2.0 * (f.minor_radius or 0.0), f.inner, f.tube_side)
-    return ir.SphereDef(fid, f.origin, 2.0 * f.radius, f.inner)
-
-
-FALLBACK_RETRACT = 1.0
-"""A retract tried when the profile's approach leaves touches that cannot be made safe
-(a boss beside a wall), mm."""
-LEAST_RETRACT = 1.5
-"""No retract below this many margins is tried (a touch must start clear of the
-surface by more than the margin), a ratio."""
-SMALL_BORE_CORE = 0.25
-"""The safe circle of a bore too small for the usual retract keeps this radius, mm."""
-
-
-def _retracts(feature: RevolvedSpec, machine: MachineProfile,
-              sections: list[Section]) -> tuple[float, ...]:
-    """The retracts to try, largest first: the spec's alone when it gives one, else the
-    probe's approach, :data:`FALLBACK_RETRACT`, and the largest that fits the smallest
-    bore section (its safe circle :data:`SMALL_BORE_CORE` in radius); none above the
-    approach or below :data:`LEAST_RETRACT` margins."""
-    if feature.retract is not None:
-        return (feature.retract,)
-    low, usual = LEAST_RETRACT * machine.margin, machine.probe.approach
-    out = [usual, max(FALLBACK_RETRACT, low)]
-    inner = [s.radius / math.cos(s.tilt) for s in sections if s.inner]
-    if inner:
-        out.append(min(inner) - machine.probe.ball_radius - SMALL_BORE_CORE)
-    return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
-
-
-def smallest_bore(machine: MachineProfile) -> float:
-    """The smallest bore diameter the profile's stylus measures, mm: the ball and the
-    smallest retract :func:`_retracts` tries (at least 1.5 margins, and in a small bore
-    one that keeps a safe circle of :data:`SMALL_BORE_CORE`)."""
-    low = LEAST_RETRACT * machine.margin
-    retract = min(low + SMALL_BORE_CORE, max(FALLBACK_RETRACT, low), machine.probe.approach)
-    return 2.0 * (machine.probe.ball_radius + retract)
-
-
-ALTERNATIVE_SECTIONS = {
-    "circle": ((0.25,), (0.75,)),
-    "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
-    "cone": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
-    "sphere": ((0.5, 0.9), (0.3, 0.7)),
-    "torus": ((0.4, 0.65, 0.9), (0.1, 0.35, 0.6)),
-}
-"""Sections tried (fractions of the axial extent) when the default ones of a spec
-without ``sections`` lose touches to the collision check, in order."""
-
-
-def _candidates(resolved: ResolvedRevolved, part: Part | None
-                ) -> Iterator[ResolvedRevolved]:
-    """The resolved feature, then (without spec sections) its alternative sections,
-    each built only when asked for."""
-    yield resolved
-    if resolved.spec.sections is not None:
-        return
-    from probegen.cad.revolved import section_at
-
-    part = _need_part(part, resolved.spec)
-    f = resolved.feature
-    low, high = f.extent
-    for fractions in ALTERNATIVE_SECTIONS[resolved.spec.kind]:
-        sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
-        if all(s.reachable for s in sections):
-            ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
-            yield ResolvedRevolved(resolved.spec, f, ordered)
-
-
-def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z: float,
-               sweeper: Sweeper, errors: list[ProbegenError],
-               retract_only: float | None = None) -> Rerouted | None:
-    """The rerouted plan of one choice of sections with the first retract of
-    :func:`_retracts` (or ``retract_only``) that keeps every touch, else the one that
-    keeps the most (None when none plans; the reasons go to ``errors``)."""
-    feature = resolved.spec
-    sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
-    best: Rerouted | None = None
-    retracts = _retracts(feature, machine, sections) if retract_only is None else (
-        retract_only,)
-    for retract in retracts:
-        try:
-            plan = plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
-                                retract=retract, margin=machine.margin, clear_z=clearance_z)
-            safe = reroute(plan, sweeper)
-        except RerouteError as exc:  # a CollisionError, itself a PlanningError
-            errors.append(RerouteError(f"{feature.where}: {exc}"))
-            continue
-        except PlanningError as exc:
-            errors.append(PlanningError(f"{feature.where}: {exc}"))
-            continue
-        if best is None or len(safe.dropped) < len(best.dropped):
-            best = safe
-        if not safe.dropped:
-            break
-    return best
-
-
-def _touches(plan: FeaturePlan) -> int:
-    return sum(1 for p in plan.path if p.normal is not None)
-
-
-def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
-                  clearance_z: float) -> RevolvedPlan:
-    """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``,
-    made safe against the part (:func:`probegen.planning.reroute.reroute`).
-
-    Tried in order until every touch is kept: the sections (the spec's or the default
-    ones) with the retracts of :func:`_retracts`, then (when the spec gives no sections)
-    :data:`ALTERNATIVE_SECTIONS` with the retract that kept the most touches there; else
-    the plan that keeps the most touches.
-
-    Raises:
-        PlanningError: nothing plans (the first reason).
-        CollisionError: no touch can be made safe (names the move and the face).
-
-    The plan is kept on the part by (spec feature, machine, clearance level):
-    ``--all-revolved`` plans each feature to choose the spec, then the program plans the
-    spec; ``ingest`` plans the program, then each feature again.
-    """
-    loaded = _need_part(part, feature)
-    return loaded.memo(("revolved plan", feature, machine, clearance_z),
-                       lambda: _plan_revolved(feature, loaded, machine, clearance_z))
-
-
-def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
-                   clearance_z: float) -> RevolvedPlan:
-    resolved = resolve_revolved(feature, part)
-    sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
-    errors: list[ProbegenError] = []
-    best: tuple[ResolvedRevolved, Rerouted] | None = None
-    for k, candidate in enumerate(_candidates(resolved, part)):
-        # other sections only with the retract that served the default ones best
-        only = best[1].plan.sections[0].retract if k and best is not None else None
-        safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
-        if safe is None:
-            continue
-        if best is None or _touches(safe.plan) > _touches(best[1].plan):
-            notes = safe.notes if not k else (
-                "default sections lose touches; measured at z = " + ", ".join(
-                    f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
-            best = (candidate, replace(safe, notes=tuple(notes)))
-        if not safe.dropped:
-            break
-    if best is None:
-        raise errors[0]
-    chosen, safe = best
-    return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
-
-
-def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
-                   clearance_z: float) -> tuple[ir.Node, ...]:
-    """The feature's nodes: a rapid above its entry, then its block."""
-    nodes = feature_nodes(p.plan, overtravel=machine.probe.overtravel, clearance_z=clearance_z)
-    return (nodes[0], ir.FeatureBlock(p.definition, nodes[1:]))
+__all__ = ["ALTERNATIVE_SECTIONS", "CLEARANCE_ABOVE_MODEL", "DEFAULT_SECTIONS", "KIND_OF_TYPE",
+           "TYPE_OF_KIND", "ResolvedRevolved", "RevolvedPlan", "all_revolved",
+           "all_revolved_spec", "check_alone", "definition", "find_owner", "metrics_table",
+           "plan_revolved", "resolve_revolved", "revolved_nodes", "smallest_bore", "top_z"]
 
 
 KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere", "torus": "torus"}
@@ -337,31 +48,34 @@ KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere", "tor
 
 def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
                  check: bool = True) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
-    """A spec feature for every accessible revolved feature of a part that plans
-    (default sections, 8 points) and, with ``check``, whose moves clear the collision
-    check on their own (:func:`check_alone`); a line for each one left out with the
-    reason (:func:`probegen.planning.left_out.revolved_left_out`)."""
+    """A spec feature for every revolved feature of a part that some orientation of the
+    machine reaches and that plans with some stylus of the rack (default sections, 8
+    points; :func:`probegen.planning.oriented.plan_oriented`) and, with ``check``, whose
+    moves clear the collision check on their own in its frame (:func:`check_alone`); a
+    line for each one left out with the reason
+    (:func:`probegen.planning.left_out.revolved_left_out`)."""
     from probegen.cad.revolved import revolved_features
-    from probegen.planning.left_out import revolved_left_out
+    from probegen.planning.left_out import revolved_left_out, smallest_stylus
 
     out: list[RevolvedSpec] = []
     notes: list[str] = []
-    least = smallest_bore(machine)
+    least = smallest_bore(machine.with_stylus(smallest_stylus(machine)))
     for f in revolved_features(part):
         fid = f"R{f.id}"
-        if f.type not in KIND_OF_TYPE or not f.accessible:
+        if f.type not in KIND_OF_TYPE or not (f.accessible or reorientable(f, machine)):
             notes.append(revolved_left_out(f, part, machine, f.reason, least))
             continue
-        spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}", _kind(f),
-                            f.faces[0], None, None, 8, None)
+        spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}",
+                            _spec_kind(f, part, machine), f.faces[0], None, None, 8, None)
         try:
-            planned = plan_revolved(spec, part, machine, clearance_z)
+            planned = plan_oriented(spec, part, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
             notes.append(revolved_left_out(f, part, machine, str(exc), least))
             continue
         if check:
             try:
-                check_alone(planned, part, machine, clearance_z)
+                check_alone(planned.plan, planned.part, machine.with_stylus(planned.stylus),
+                            planned.clearance_z)
             except CollisionError as exc:
                 notes.append(revolved_left_out(f, part, machine,
                                                f"left out, it collides: {exc}", least))
@@ -370,10 +84,30 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
     return tuple(out), tuple(notes)
 
 
+def _spec_kind(f: Any, part: Part, machine: MachineProfile) -> str:
+    """:func:`_kind` of the feature as the frame that reaches it sees it (its sections
+    reachable there); as recognised on the part when it is reachable from above or no
+    orientation reaches it."""
+    if f.accessible:
+        return _kind(f)
+    from probegen.cad.revolved import revolved_features
+
+    for a in approaches(f, part):
+        o = orientation_for(machine, a)
+        if isinstance(o, str):
+            continue
+        turned = part.turned(o.rotation)
+        seen = next((g for g in revolved_features(turned) if f.faces[0] in g.faces), None)
+        if seen is not None and seen.accessible:
+            return _kind(seen)
+    return _kind(f)
+
+
 def check_alone(p: RevolvedPlan, part: Part, machine: MachineProfile,
                 clearance_z: float) -> None:
     """Check one planned feature's moves (from the clearance plane and back) against the
-    model with the machine's margin.
+    model with the machine's margin (a feature planned in a frame: against the turned
+    part, at the frame's clearance level, with the profile of its stylus).
 
     Raises:
         CollisionError: a move of the feature brings the stylus into the part.
@@ -390,12 +124,12 @@ CLEARANCE_ABOVE_MODEL = 10.0
 
 
 def all_revolved_spec(part: Part, machine: MachineProfile) -> tuple[Spec, tuple[str, ...]]:
-    """The spec of ``probegen plan MODEL --all-revolved``: every accessible cylinder, cone
-    and sphere that plans and clears the collision check alone (default sections, 8
-    points), the clearance plane at least ``CLEARANCE_ABOVE_MODEL`` above the model;
-    and a note for each feature left out (with the reason or the collision).  A model
-    with no such feature gives a spec without features (an empty program) and the
-    notes that say why.
+    """The spec of ``probegen plan MODEL --all-revolved``: every cylinder, cone, sphere and
+    torus some orientation reaches that plans and clears the collision check alone
+    (default sections, 8 points; :func:`all_revolved`), the clearance plane at least
+    ``CLEARANCE_ABOVE_MODEL`` above the model; and a note for each feature left out (with
+    the reason or the collision).  A model with no such feature gives a spec without
+    features (an empty program) and the notes that say why.
     """
     top = part.bbox_max[2]
     clearance = max(machine.clearance_z, top + CLEARANCE_ABOVE_MODEL)
@@ -414,23 +148,35 @@ def _kind(f: Any) -> str:
     return KIND_OF_TYPE[f.type]
 
 
-def metrics_table(plans: tuple[RevolvedPlan, ...], machine: MachineProfile) -> str:
+def metrics_table(plans: tuple[RevolvedPlan, ...], machine: MachineProfile,
+                  oriented: tuple[OrientedPlan, ...] = ()) -> str:
     """Per feature: touches, path length (mm) and nominal cycle time (s) of the plan,
     the common baseline (up to the clearance level after every touch) and the lower
-    bound (:func:`probegen.planning.revolved.compare`), with totals."""
+    bound (:func:`probegen.planning.revolved.compare`), with totals.  With ``oriented``
+    (the program's plans with their orientation and stylus) where any feature is measured
+    turned or with another stylus than ``[probe]``'s: two more columns, the orientation
+    (``A90BM90``, ``TILT``: the tilt angle, ``-``: vertical) and the stylus label."""
     from probegen.planning.revolved import compare
 
+    extra = {o.plan.spec.id: o for o in oriented}
+    wide = any(not o.orientation.identity or o.stylus != machine.stylus for o in oriented)
     head = (f"{'feature':<8} {'kind':<8} {'side':<5} {'sect':>4} {'pts':>4}  "
             f"{'plan mm':>9} {'s':>7}  {'baseline mm':>11} {'s':>7}  {'bound mm':>9} {'s':>7}")
-    rows = [head]
+    rows = [head + (f"  {'orient':<10} {'stylus':<8}" if wide else "")]
     total = [0.0] * 6
     for p in plans:
-        c = compare(p.plan, machine)
+        o = extra.get(p.spec.id)
+        m = machine if o is None or o.stylus == machine.stylus else machine.with_stylus(
+            o.stylus)
+        c = compare(p.plan, m)
         values = (c.plan.length, c.plan.time, c.baseline.length, c.baseline.time,
                   c.lower_bound.length, c.lower_bound.time)
         total = [a + b for a, b in zip(total, values, strict=True)]
-        rows.append(_row(p.spec.id, p.spec.kind, "inner" if p.definition.inner else "outer",
-                         len(p.plan.sections), len(p.normals), values))
+        row = _row(p.spec.id, p.spec.kind, "inner" if p.definition.inner else "outer",
+                   len(p.plan.sections), len(p.normals), values)
+        if wide and o is not None:
+            row += f"  {orientation_label(o.orientation):<10} {o.stylus.label:<8}"
+        rows.append(row)
     rows.append(_row("total", "", "", sum(len(p.plan.sections) for p in plans),
                      sum(len(p.normals) for p in plans), tuple(total)))
     return "\n".join(rows) + "\n"

@@ -1,0 +1,319 @@
+"""Probe orientations and styli (issue 17): which orientation of the machine reaches an
+approach direction, the ``ir.Orient`` node of it, the stylus of the rack a feature is
+measured with, and the order of the (stylus, orientation) groups of a program.
+
+Conventions:
+
+* The approach direction ``a`` is a unit vector in work coordinates from the feature
+  outwards, towards where the probe comes from; the frame of ``a`` is
+  :func:`probegen.ir.frames.frame_for` (frame +Z = ``a``), one convention for every
+  machine.  A feature is planned in that frame on ``part.turned(R)`` exactly as a
+  vertical-probe feature is today.
+* A CMM's indexable head (``machine.head``): ``A`` is the angle of the stylus from straight
+  down (0: vertical, 90: horizontal), ``B`` the azimuth about the vertical, counter-clockwise
+  seen from above, with ``B = 0`` pointing the stylus towards -Y, in ``(-180, 180]``.
+  The approach direction (from the ball towards the head) is then
+  ``a = (-sin A·sin B, sin A·cos B, cos A)``: ``A90B0`` probes faces facing +Y,
+  ``A90B-90`` faces facing +X, ``A90B90`` faces facing -X, ``A90B180`` faces facing -Y.
+  The DMIS dialect writes these angles as ``SNSDEF/PROBE,INDEX,POL,A,B,...``.  Both angles
+  must lie on the head's ``step`` grid (within :data:`GRID_SNAP` deg) and in its ranges.
+* A five-axis machine's tilted work plane (``machine.tilt``): the tilt angle is the
+  angle of ``a`` from +Z (G68.2 ``J``), within ``tilt_range`` (either sign: the rotary axis
+  turns the other half round), the rotary angle any (G68.2 ``I``).
+* The identity orientation is named ``A0B0`` on a head, ``TILT0`` on a tilt; other tilted
+  planes ``TILT1``, ``TILT2`` ... in the order the program takes them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import numpy as np
+
+from probegen import ir
+from probegen.errors import CollisionError, PlanningError, ProbegenError
+from probegen.ir import frames
+from probegen.machine.profile import MachineProfile, Stylus
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
+
+T = TypeVar("T")
+GRID_SNAP = 1e-6
+"""A head angle within this (deg) of the step grid is on it (snapped)."""
+LEAST_GAP = 10.0
+"""A frame's clearance level is at least this far above the turned part, mm."""
+EXACT_ORDER = 7
+"""Up to this many (stylus, orientation) groups are ordered by trying every order."""
+
+
+@dataclass(frozen=True, slots=True)
+class Orientation:
+    """An orientation the machine takes: the frame's rotation and the machine's angles.
+
+    Attributes:
+        rotation: the frame (:func:`probegen.ir.frames.frame_for` of the approach).
+        head: a CMM head's ``(A, B)``, deg, on its grid; None on a machine tool.
+        rotary: the tilted plane's ``((tilt axis, J), (rotary axis, I))``, deg (G68.2
+            ``J`` and ``I``); () on a CMM.
+    """
+
+    rotation: frames.Rotation
+    head: tuple[float, float] | None = None
+    rotary: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def identity(self) -> bool:
+        """Whether this is the vertical probe."""
+        return frames.is_identity(self.rotation)
+
+    @property
+    def key(self) -> Hashable:
+        """What tells two orientations apart (the rotation, rounded)."""
+        return tuple(round(x, 9) + 0.0 for row in self.rotation for x in row)
+
+
+def can_orient(machine: MachineProfile) -> bool:
+    """Whether the machine turns its probe (a CMM head or a five-axis tilt)."""
+    return machine.head is not None or machine.tilt is not None
+
+
+def head_angles(a: ir.Vec3) -> tuple[float, float]:
+    """The head's ``(A, B)`` (deg) of approach direction ``a`` (see the module docstring);
+    ``B = 0`` for a vertical ``a``."""
+    z = max(-1.0, min(1.0, a[2]))
+    big_a = math.degrees(math.acos(z))
+    if math.hypot(a[0], a[1]) < frames.VERTICAL:
+        return big_a, 0.0
+    big_b = math.degrees(math.atan2(-a[0], a[1])) + 0.0
+    return big_a, (180.0 if big_b <= -180.0 + GRID_SNAP else big_b)
+
+
+def head_direction(big_a: float, big_b: float) -> ir.Vec3:
+    """The approach direction of head angles ``A``, ``B`` (deg): the inverse of
+    :func:`head_angles`."""
+    sa, ca = math.sin(math.radians(big_a)), math.cos(math.radians(big_a))
+    sb, cb = math.sin(math.radians(big_b)), math.cos(math.radians(big_b))
+    return (-sa * sb, sa * cb, ca)
+
+
+def _on_grid(value: float, step: float) -> float | None:
+    """``value`` snapped to the grid of ``step`` (deg), or None when it is off it."""
+    k = round(value / step)
+    return k * step + 0.0 if abs(value - k * step) <= GRID_SNAP else None
+
+
+def orientation_for(machine: MachineProfile, a: ir.Vec3) -> Orientation | str:
+    """The orientation of ``machine`` that probes along approach direction ``a`` (unit,
+    work coordinates), or the reason none does, in words the user can act on."""
+    rotation = frames.frame_for(a)
+    if frames.is_identity(rotation):
+        return identity_of(machine)
+    if machine.head is not None:
+        return _head(machine, a, rotation)
+    if machine.tilt is not None:
+        tilt = machine.tilt
+        i, j, _ = frames.euler_zxz(rotation)
+        reach = max(tilt.tilt_range[1], -tilt.tilt_range[0])
+        if j > reach + GRID_SNAP:
+            return (f"tilt {j:.1f} deg: beyond the {tilt.tilt_axis} axis's range "
+                    f"{tilt.tilt_range[0]:g}..{tilt.tilt_range[1]:g}: needs a setup")
+        return Orientation(rotation, None, ((tilt.tilt_axis, j), (tilt.rotary_axis, i)))
+    return ("no orientation reaches this face: the probe stays vertical (add a [head] "
+            "or [tilt] to the machine profile, or a setup)")
+
+
+def _head(machine: MachineProfile, a: ir.Vec3, rotation: frames.Rotation
+          ) -> Orientation | str:
+    head = machine.head
+    assert head is not None
+    big_a, big_b = head_angles(a)
+    if not head.a[0] - GRID_SNAP <= big_a <= head.a[1] + GRID_SNAP:
+        return (f"axis at A {big_a:.1f} B {big_b:.1f}: beyond the head's A range "
+                f"{head.a[0]:g}..{head.a[1]:g}: no orientation reaches this face: needs a "
+                "setup")
+    sa, sb = _on_grid(big_a, head.step), _on_grid(big_b, head.step)
+    if sa is None or sb is None:
+        return (f"axis at A {big_a:.1f} B {big_b:.1f}: not on the head's {head.step:g} deg "
+                "grid: needs a setup")
+    if not head.b[0] - GRID_SNAP <= sb <= head.b[1] + GRID_SNAP:
+        if head.b[0] - GRID_SNAP <= sb - 360.0:
+            sb -= 360.0
+        elif sb + 360.0 <= head.b[1] + GRID_SNAP:
+            sb += 360.0
+        else:
+            return (f"axis at A {sa:g} B {sb:g}: beyond the head's B range "
+                    f"{head.b[0]:g}..{head.b[1]:g}: no orientation reaches this face: add "
+                    "the B range or a setup")
+    return Orientation(rotation, (sa, sb), ())
+
+
+def identity_of(machine: MachineProfile) -> Orientation:
+    """The vertical probe's orientation (head ``A0 B0``, tilt 0)."""
+    if machine.head is not None:
+        return Orientation(frames.IDENTITY, (0.0, 0.0), ())
+    if machine.tilt is not None:
+        t = machine.tilt
+        return Orientation(frames.IDENTITY, None, ((t.tilt_axis, 0.0), (t.rotary_axis, 0.0)))
+    return Orientation(frames.IDENTITY)
+
+
+def _angle_text(value: float) -> str:
+    """A head angle in a label: ``90``, ``M90``, ``37_5``."""
+    text = f"{abs(value):.4f}".rstrip("0").rstrip(".").replace(".", "_")
+    return ("M" if value < 0.0 else "") + text
+
+
+def orient_name(o: Orientation, number: int) -> str:
+    """The ``ir.Orient`` label: ``A90BM90`` on a head; ``TILT<number>`` on a tilt (the
+    identity ``TILT0``); ``FRAME<number>`` otherwise."""
+    if o.head is not None:
+        return f"A{_angle_text(o.head[0])}B{_angle_text(o.head[1])}"
+    if o.rotary:
+        return f"TILT{0 if o.identity else number}"
+    return "VERTICAL" if o.identity else f"FRAME{number}"
+
+
+def orientation_label(o: Orientation) -> str:
+    """A short text of an orientation for tables: ``A90BM90`` on a head, ``A45C90`` (the
+    tilt and rotary angles) on a tilt, ``-`` for the vertical probe."""
+    if o.identity:
+        return "-"
+    if o.head is not None:
+        return orient_name(o, 0)
+    return "".join(f"{axis}{_angle_text(round(angle, 3))}" for axis, angle in o.rotary)
+
+
+def frame_clearance(part: Part | None, o: Orientation, clearance_z: float) -> float:
+    """The clearance level (frame Z, mm) of orientation ``o``: the turned part's top plus
+    the gap the spec's clearance plane ``clearance_z`` has above the part, at least
+    :data:`LEAST_GAP`; ``clearance_z`` itself for the vertical probe."""
+    if o.identity or part is None:
+        return clearance_z
+    gap = max(clearance_z - part.bbox_max[2], LEAST_GAP)
+    return part.turned(o.rotation).bbox_max[2] + gap
+
+
+def orient_node(o: Orientation, name: str, clearance_z: float) -> ir.Orient:
+    """The ``ir.Orient`` of orientation ``o`` (origin at the work zero)."""
+    return ir.Orient(name, o.rotation, (0.0, 0.0, 0.0), o.head, o.rotary, clearance_z)
+
+
+def select_node(s: Stylus) -> ir.SelectStylus:
+    """The ``ir.SelectStylus`` of stylus ``s``."""
+    return ir.SelectStylus(s.label, s.tool_number, s.ball_diameter, s.shank_diameter,
+                           s.length)
+
+
+def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T],
+                force: str | None = None) -> tuple[Stylus, T]:
+    """The stylus a feature is measured with and its plan: the one labelled ``force``,
+    else the largest ball of ``machine.styli()`` that plans (``plan_with`` of the profile
+    with it as the probe raises no :class:`ProbegenError`); ties keep profile order.
+
+    Raises:
+        PlanningError: ``force`` names no stylus of the rack.
+        ProbegenError: no stylus plans (the largest ball's reason).
+    """
+    styli = machine.styli()
+    if force is not None:
+        chosen = [s for s in styli if s.label == force]
+        if not chosen:
+            raise PlanningError(f"stylus {force}: expected one of "
+                                f"{', '.join(s.label for s in styli)}, found none")
+        return chosen[0], plan_with(machine.with_stylus(chosen[0]))
+    order = sorted(range(len(styli)), key=lambda k: (-styli[k].ball_diameter, k))
+    first: ProbegenError | None = None
+    for k in order:
+        try:
+            return styli[k], plan_with(machine.with_stylus(styli[k]))
+        except ProbegenError as exc:
+            first = first or exc
+    assert first is not None
+    raise first
+
+
+# ------------------------------------------------------- the moves of a change
+
+LEVEL_SLACK = 1e-6
+"""A position this far (mm) below a clearance level is at it."""
+
+
+def to_frame(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Work point ``p`` in ``frame``'s coordinates (None: the work frame)."""
+    return np.asarray(frames.to_frame(frame, (float(p[0]), float(p[1]), float(p[2]))))
+
+
+def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
+    """Point ``p`` of ``frame`` in work coordinates (None: the work frame)."""
+    return np.asarray(frames.to_work(frame, (float(p[0]), float(p[1]), float(p[2]))))
+
+
+def index_height(part: Part, stylus: Any, machine: MachineProfile) -> float:
+    """The work Z where the probe changes orientation, mm: the part's top plus the whole
+    stylus (length and ball), the head's body on a CMM and the margin, so that the
+    stylus clears the part's bounding box in every direction it turns to.  ``stylus``:
+    the collision check's (``ball`` radius and ``length``, mm)."""
+    body = machine.head.body_length if machine.head is not None else 0.0
+    return part.bbox_max[2] + stylus.length + stylus.ball + body + machine.margin
+
+
+def index_point(part: Part, frame: ir.Orient | None, pos: np.ndarray, level: float,
+                node: ir.Orient, stylus: Any, machine: MachineProfile) -> np.ndarray:
+    """Where orientation change ``node`` is taken (work coordinates): straight up (work
+    +Z) from ``pos`` (the old ``frame``'s coordinates) to :func:`index_height`.
+
+    Raises:
+        CollisionError: ``pos`` is below the old frame's clearance ``level``.
+    """
+    if pos[2] < level - LEVEL_SLACK:
+        raise CollisionError(f"orientation change to {node.name}: the probe is at frame "
+                             f"z = {pos[2]:.3f}, expected the old frame's clearance level "
+                             f"{level:.3f} or above")
+    here = to_work(frame, pos)
+    return np.array([here[0], here[1], max(here[2], index_height(part, stylus, machine))])
+
+
+def over_point(index: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The point at the index height over ``target`` (both work coordinates): the new
+    orientation goes there level, then to its first point."""
+    return np.array([target[0], target[1], max(index[2], target[2])])
+
+
+
+Group = tuple[str, Hashable]
+"""A (stylus label, orientation key) group of features."""
+
+
+def changes(order: Sequence[Group], start: Group, identity: Hashable) -> tuple[int, int]:
+    """Stylus changes and orientation changes of visiting ``order`` from ``start``, then
+    back to the identity orientation and the start stylus."""
+    path = [start, *order, start]
+    path[-1] = (start[0], identity)
+    stylus = sum(1 for x, y in itertools.pairwise(path) if x[0] != y[0])
+    orient = sum(1 for x, y in itertools.pairwise(path) if x[1] != y[1])
+    return stylus, orient
+
+
+def order_groups(groups: Sequence[Group], start: Group, identity: Hashable
+                 ) -> tuple[Group, ...]:
+    """``groups`` in the order with the fewest stylus and orientation changes
+    (:func:`changes`, summed) from ``start`` and back; among equals the one closest to
+    the given order.  Every order is tried up to :data:`EXACT_ORDER` groups; beyond,
+    the nearest group next (fewest changes from the last one, given order on ties)."""
+    def cost(order: Sequence[Group]) -> int:
+        return sum(changes(order, start, identity))
+
+    if len(groups) <= EXACT_ORDER:
+        return min(itertools.permutations(groups), key=cost)
+    left, out, here = list(groups), [], start
+    while left:
+        nxt = min(left, key=lambda g: (g[0] != here[0]) + (g[1] != here[1]))
+        out.append(nxt)
+        left.remove(nxt)
+        here = nxt
+    return tuple(out)

@@ -1,0 +1,222 @@
+"""Revolved features in any orientation the machine reaches, with the stylus that fits
+(issue 17): plan one spec feature (:func:`plan_oriented`) and lay out the planned features
+of a program in (stylus, orientation) groups with their ``ir.SelectStylus`` and
+``ir.Orient`` nodes between them (:func:`grouped_nodes`).
+
+A feature whose axis is along +Z and reachable from above is planned as it always was, on
+the part as loaded; another is resolved on the part as loaded (its axis, which end is
+open: out of material), then planned in the frame of the approach from that end
+(:func:`probegen.planning.orient.orientation_for`) on ``part.turned(R)`` at the frame's
+clearance level, exactly as a vertical feature.  Its plan, nodes and definition are in
+frame coordinates; :func:`probegen.ir.frames.in_work` maps them back.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from probegen import ir
+from probegen.errors import PlanningError, ProbegenError
+from probegen.ir import frames
+from probegen.machine.profile import MachineProfile, Stylus
+from probegen.planning.orient import (
+    Orientation,
+    can_orient,
+    changes,
+    frame_clearance,
+    identity_of,
+    order_groups,
+    orient_name,
+    orient_node,
+    orientation_for,
+    pick_stylus,
+    select_node,
+)
+from probegen.planning.revolved_plan import RevolvedPlan, find_owner, plan_revolved
+from probegen.spec.model import RevolvedSpec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
+
+OPEN_PROBE = 0.05
+"""How far beyond an end of a feature (mm, along its axis) the open-end test looks."""
+
+
+@dataclass(frozen=True, slots=True)
+class OrientedPlan:
+    """A revolved feature planned in its orientation with its stylus.
+
+    Attributes:
+        plan: the plan, in the frame's coordinates (``plan.spec`` is the spec's feature).
+        orientation: the orientation (the identity for a vertical feature).
+        stylus: the stylus of the rack it is measured with.
+        part: the part in the frame (``part.turned(R)``; the part itself for the
+            identity).
+        clearance_z: the frame's clearance level (frame Z), mm.
+    """
+
+    plan: RevolvedPlan
+    orientation: Orientation
+    stylus: Stylus
+    part: Part
+    clearance_z: float
+
+    @property
+    def group(self) -> tuple[str, Hashable]:
+        """The (stylus label, orientation key) group of the feature."""
+        return (self.stylus.label, self.orientation.key)
+
+
+def forced_stylus(feature: RevolvedSpec) -> str | None:
+    """The stylus label a spec feature forces (the ``stylus =`` key, when the spec has
+    it), or None."""
+    value = getattr(feature, "stylus", None)
+    return value if isinstance(value, str) else None
+
+
+def approaches(owner: Any, part: Part) -> list[ir.Vec3]:
+    """The approach directions of a recognised feature, best first: along its axis out
+    of each end.  A bore's end must be open (a point :data:`OPEN_PROBE` beyond it on the
+    axis out of material; both ends when the model has no solid); a boss, a shaft or a
+    fillet is approached beside its surface, so both ends are tried (the planner and the
+    collision check decide), the open ones first.  Then the more upward first."""
+    axis = np.asarray(owner.axis, dtype=np.float64)
+    low, high = owner.extent
+    out: list[tuple[bool, float, ir.Vec3]] = []
+    for sign, end in ((1.0, high), (-1.0, low)):
+        beyond = np.asarray(owner.centre_at(end)) + sign * OPEN_PROBE * axis
+        closed = part.exact.inside(beyond) is True
+        if closed and owner.inner:
+            continue
+        a = tuple(float(sign * v) for v in axis)
+        out.append((closed, -a[2], a))  # type: ignore[arg-type]
+    return [a for *_, a in sorted(out, key=lambda t: t[:2])]
+
+
+def reorientable(owner: Any, machine: MachineProfile) -> bool:
+    """Whether a recognised feature not reachable from above may be in another
+    orientation: the machine turns its probe and the feature has an axis (not a sphere)."""
+    return can_orient(machine) and owner.type != "sphere"
+
+
+def in_frame(feature: RevolvedSpec, rotation: frames.Rotation) -> RevolvedSpec:
+    """The spec feature as the turned part sees it (``at`` turned into the frame)."""
+    if feature.at is None:
+        return feature
+    return replace(feature, at=frames.apply_t(rotation, feature.at))
+
+
+def _planner(feature: RevolvedSpec, part: Part, clearance_z: float
+             ) -> Callable[[MachineProfile], RevolvedPlan]:
+    """Plan ``feature`` on ``part`` at ``clearance_z`` with a given profile."""
+    return lambda machine: plan_revolved(feature, part, machine, clearance_z)
+
+
+def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
+                  clearance_z: float) -> OrientedPlan:
+    """Plan one revolved feature in the orientation that reaches it, with the largest
+    stylus of the rack that plans it (or the one the spec forces).
+
+    Raises:
+        PlanningError: no orientation reaches it (the reason of each tried), or it does
+            not plan (the first reason).
+        ModelError: the face is not a face of the right feature.
+    """
+    force = forced_stylus(feature)
+    if part is None:
+        plan_revolved(feature, part, machine, clearance_z)  # the SpecError of no model
+        raise AssertionError("unreachable")  # pragma: no cover
+    owner = find_owner(feature, part)
+    if owner.accessible or not reorientable(owner, machine):
+        s, plan = pick_stylus(machine, _planner(feature, part, clearance_z), force)
+        return OrientedPlan(plan, identity_of(machine), s, part, clearance_z)
+    reasons: list[str] = []
+    errors: list[ProbegenError] = []
+    for a in approaches(owner, part):
+        o = orientation_for(machine, a)
+        if isinstance(o, str):
+            reasons.append(o)
+            continue
+        turned = part.turned(o.rotation)
+        clear = frame_clearance(part, o, clearance_z)
+        local = in_frame(feature, o.rotation)
+        try:
+            s, plan = pick_stylus(machine, _planner(local, turned, clear), force)
+        except ProbegenError as exc:
+            errors.append(exc)
+            continue
+        if feature.actions.work_offset is not None or feature.actions.align is not None:
+            raise PlanningError(f"{feature.where}: update_work_offset and align are computed "
+                                "in work X and Y, found a feature measured in a turned frame "
+                                f"({orient_name(o, 1)}): measure it from above or drop the "
+                                "action")
+        return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
+    if errors:
+        raise errors[0]
+    why = "; ".join(dict.fromkeys(reasons)) or "no open end to approach it from"
+    raise PlanningError(f"{feature.where}: {why}")
+
+
+@dataclass(frozen=True, slots=True)
+class GroupedNodes:
+    """The revolved features' nodes in groups, with what the grouping cost.
+
+    Attributes:
+        nodes: the top-level nodes (``SelectStylus``, ``Orient`` and each group's tour).
+        plans: the plans in measuring order.
+        stylus_changes: ``SelectStylus`` nodes (the return to the first stylus included).
+        orientation_changes: ``Orient`` nodes (the return to the vertical included).
+    """
+
+    nodes: tuple[ir.Node, ...]
+    plans: tuple[OrientedPlan, ...]
+    stylus_changes: int
+    orientation_changes: int
+
+
+Tour = Callable[[Sequence[OrientedPlan]], tuple[list[ir.Node], list[OrientedPlan]]]
+"""Lays out one group's plans (one stylus, one orientation) as today's tour: its nodes
+and the plans in tour order."""
+
+
+def grouped_nodes(plans: Sequence[OrientedPlan], machine: MachineProfile,
+                  clearance_z: float, tour: Tour) -> GroupedNodes:
+    """Group ``plans`` by (stylus, orientation), order the groups for the fewest changes
+    (:func:`probegen.planning.orient.order_groups`) from the program's start (the
+    ``[probe]`` stylus, vertical) and lay out each with ``tour``; a ``SelectStylus`` and
+    an ``Orient`` where they change (the stylus first, at the old frame's clearance
+    level), and at the end back to the start stylus and the vertical (at the spec's
+    ``clearance_z``)."""
+    first = machine.stylus
+    identity = identity_of(machine)
+    groups: dict[tuple[str, Hashable], list[OrientedPlan]] = {}
+    for p in plans:
+        groups.setdefault(p.group, []).append(p)
+    start = (first.label, identity.key)
+    order = order_groups(list(groups), start, identity.key)
+    nodes: list[ir.Node] = []
+    done: list[OrientedPlan] = []
+    here = start
+    names: dict[Hashable, str] = {identity.key: orient_name(identity, 0)}
+    for key in order:
+        members = groups[key]
+        head = members[0]
+        if key[0] != here[0]:
+            nodes.append(select_node(head.stylus))
+        if key[1] != here[1]:
+            name = names.setdefault(key[1], orient_name(head.orientation, len(names)))
+            nodes.append(orient_node(head.orientation, name, head.clearance_z))
+        laid, ordered = tour(members)
+        nodes += laid
+        done += ordered
+        here = key
+    if here[0] != start[0]:
+        nodes.append(select_node(first))
+    if here[1] != start[1]:
+        nodes.append(orient_node(identity, names[identity.key], clearance_z))
+    stylus, orient = changes(order, start, identity.key)
+    return GroupedNodes(tuple(nodes), tuple(done), stylus, orient)

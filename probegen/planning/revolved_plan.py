@@ -1,0 +1,342 @@
+"""Revolved features of a spec (method M2 wired): resolve, plan, IR (one feature in the
+probe's frame; :mod:`probegen.planning.revolved_spec` holds what serves the whole spec).
+
+A spec feature of kind ``circle``, ``cylinder``, ``cone`` or ``sphere`` names a model
+face (``face = N`` or ``at = [x, y, z]``); it is resolved to the recognised revolved
+feature (:func:`probegen.cad.revolved.revolved_features`) whose faces hold that face.
+Sections are given as depths below the feature's top end, along -Z (accessible
+features have vertical axes), and sorted top first; without ``sections`` the
+recognised default sections are used (a circle: one, at the middle of the extent).
+
+The part is assumed set up by its work offset: no locating, no run-time variables, and
+the collision check adds no position uncertainty.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+from probegen import ir
+from probegen.errors import ModelError, PlanningError, ProbegenError, SpecError
+from probegen.machine.profile import MachineProfile
+from probegen.planning.collision import obstacle_for
+from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
+from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.spec.model import RevolvedSpec
+
+if TYPE_CHECKING:
+    from probegen.cad import Part
+
+TYPE_OF_KIND = {"circle": "cylinder", "cylinder": "cylinder", "cone": "cone",
+                "sphere": "sphere", "torus": "torus"}
+"""The recognised surface type each revolved kind measures."""
+
+
+@dataclass(frozen=True, slots=True)
+class ResolvedRevolved:
+    """A spec feature with its recognised feature and chosen sections (``cad.revolved``
+    objects: ``RevolvedFeature`` and ``FeatureSection``s, top first)."""
+
+    spec: RevolvedSpec
+    feature: Any
+    sections: tuple[Any, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class RevolvedPlan:
+    """A planned revolved feature: what it is, its M2 plan and its IR definition."""
+
+    spec: RevolvedSpec
+    resolved: ResolvedRevolved
+    plan: FeaturePlan
+    definition: ir.FeatureDef
+    notes: tuple[str, ...] = ()
+    """What the reroute changed (:mod:`probegen.planning.reroute`), one line each."""
+
+    @property
+    def normals(self) -> dict[int, tuple[float, float, float]]:
+        """The planned outward normal of each touch index."""
+        return {p.index: p.normal for p in self.plan.path if p.normal is not None}
+
+    @property
+    def section_of_touch(self) -> dict[int, int]:
+        """The 0-based section of each touch index."""
+        return {p.index: p.section for p in self.plan.path if p.normal is not None}
+
+
+def _need_part(part: Part | None, feature: RevolvedSpec) -> Part:
+    """``part``, or a SpecError for a spec without a model."""
+    if part is None:
+        raise SpecError(f"{feature.where}: kind {feature.kind} needs [part] model, found none")
+    return part
+
+
+def find_owner(feature: RevolvedSpec, part: Part) -> Any:
+    """The recognised revolved feature (``cad.revolved.RevolvedFeature``) holding the
+    spec feature's face (``face`` or ``at``), accessible or not.
+
+    Raises:
+        ModelError: the face is not a face of a revolved feature of the right type.
+    """
+    from probegen import cad
+    from probegen.cad.revolved import revolved_features
+
+    face = cad.face_by_id(part.model, feature.face) if feature.face else cad.face_at(
+        part.model, feature.at or (0.0, 0.0, 0.0))
+    owner = next((f for f in revolved_features(part) if face.id in f.faces), None)
+    want = TYPE_OF_KIND[feature.kind]
+    if owner is None or owner.type != want:
+        what = f"face {face.id} of type {face.type}" if owner is None else (
+            f"face {face.id} of revolved feature {owner.id}, a {owner.type}")
+        raise ModelError(f"{feature.where}: expected a face of a {want} for kind "
+                         f"{feature.kind}, found {what}")
+    return owner
+
+
+def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolved:
+    """Find the recognised feature and its sections.
+
+    Raises:
+        SpecError: no model; a depth outside the feature.
+        ModelError: the face is not a face of a revolved feature of the right type.
+        PlanningError: the feature or a chosen section is not accessible (with the
+            recognition's reason).
+    """
+    from probegen.cad.revolved import section_at
+
+    part = _need_part(part, feature)
+    owner = find_owner(feature, part)
+    if not owner.accessible:
+        raise PlanningError(f"{feature.where}: revolved feature {owner.id} ({owner.type}, "
+                            f"faces {','.join(map(str, owner.faces))}) is not accessible: "
+                            f"{owner.reason}")
+    sections: tuple[Any, ...]
+    if feature.sections is None:
+        sections = _default_sections(part, owner, feature.kind, section_at)
+    else:
+        sections = tuple(section_at(part, owner, _axial(feature, owner, k, depth))
+                         for k, depth in enumerate(feature.sections))
+    for k, s in enumerate(sections):
+        if not s.reachable:
+            raise PlanningError(f"{feature.where}.sections[{k}]: the section at "
+                                f"z = {s.centre[2]:.4f} is not accessible: {s.reason}")
+    z_sorted = tuple(sorted(sections, key=lambda s: -s.centre[2]))
+    return ResolvedRevolved(feature, owner, z_sorted)
+
+
+DEFAULT_SECTIONS = {"circle": (0.5,), "cone": (0.25, 0.75), "torus": (0.2, 0.5, 0.8)}
+"""Default sections (fractions of the axial extent) of a spec feature without
+``sections``, where the recognised ones do not serve: a circle has one, at the middle;
+a cone two (its angle needs two), a torus three at distinct tube angles (two circles
+of a torus lie on a family of tori).  Cylinders take the recognised sections; a sphere
+the recognised one and a second at 3/4 of its extent (one circle lies on many
+spheres)."""
+SPHERE_SECOND = 0.75
+
+
+def _default_sections(part: Part, owner: Any, kind: str, section_at: Any
+                      ) -> tuple[Any, ...]:
+    """The reachable default sections of ``owner`` for ``kind`` (see
+    :data:`DEFAULT_SECTIONS`); the recognised ones when none of these is reachable."""
+    low, high = owner.extent
+    recognised = tuple(s for s in owner.sections if s.reachable)
+    if kind == "cylinder":
+        return recognised
+    if kind == "sphere":
+        extra = section_at(part, owner, low + SPHERE_SECOND * (high - low))
+        return recognised + ((extra,) if extra.reachable else ())
+    chosen = tuple(s for s in (section_at(part, owner, low + q * (high - low))
+                               for q in DEFAULT_SECTIONS[kind]) if s.reachable)
+    return chosen or recognised
+
+
+def top_z(feature: Any) -> float:
+    """The highest Z of a vertical feature's extent, mm."""
+    az = feature.axis[2]
+    return max(feature.origin[2] + h * az for h in feature.extent)
+
+
+def _axial(spec: RevolvedSpec, feature: Any, k: int, depth: float) -> float:
+    """The axial position of the section ``depth`` mm below the top end."""
+    if depth > feature.length + 1e-9:
+        raise SpecError(f"{spec.where}.sections[{k}]: expected a depth from 0 to "
+                        f"{feature.length:.4f} mm (the feature's length), found {depth:g}")
+    az = feature.axis[2]
+    return (top_z(feature) - depth - feature.origin[2]) / az
+
+
+def definition(resolved: ResolvedRevolved) -> ir.FeatureDef:
+    """The nominal feature for the IR (and DMIS ``FEAT/...``)."""
+    f, fid = resolved.feature, resolved.spec.id
+    axis = tuple(float(v) for v in f.axis)
+    if resolved.spec.kind == "circle":
+        s = resolved.sections[0]
+        return ir.CircleDef(fid, s.centre, axis, 2.0 * s.radius, f.inner)  # type: ignore[arg-type]
+    if f.type == "cylinder":
+        centre = f.centre_at(sum(f.extent) / 2.0)
+        return ir.CylinderDef(fid, centre, axis, 2.0 * f.radius, f.length,  # type: ignore[arg-type]
+                              f.inner)
+    if f.type == "cone":
+        half = f.half_angle or 0.0
+        apex = f.centre_at(-f.radius / math.tan(half))
+        return ir.ConeDef(fid, apex, axis, half, f.inner)  # type: ignore[arg-type]
+    if f.type == "torus":
+        return ir.TorusDef(fid, f.origin, axis, 2.0 * f.radius,  # type: ignore[arg-type]
+                           2.0 * (f.minor_radius or 0.0), f.inner, f.tube_side)
+    return ir.SphereDef(fid, f.origin, 2.0 * f.radius, f.inner)
+
+
+FALLBACK_RETRACT = 1.0
+"""A retract tried when the profile's approach leaves touches that cannot be made safe
+(a boss beside a wall), mm."""
+LEAST_RETRACT = 1.5
+"""No retract below this many margins is tried (a touch must start clear of the
+surface by more than the margin), a ratio."""
+SMALL_BORE_CORE = 0.25
+"""The safe circle of a bore too small for the usual retract keeps this radius, mm."""
+
+
+def _retracts(feature: RevolvedSpec, machine: MachineProfile,
+              sections: list[Section]) -> tuple[float, ...]:
+    """The retracts to try, largest first: the spec's alone when it gives one, else the
+    probe's approach, :data:`FALLBACK_RETRACT`, and the largest that fits the smallest
+    bore section (its safe circle :data:`SMALL_BORE_CORE` in radius); none above the
+    approach or below :data:`LEAST_RETRACT` margins."""
+    if feature.retract is not None:
+        return (feature.retract,)
+    low, usual = LEAST_RETRACT * machine.margin, machine.probe.approach
+    out = [usual, max(FALLBACK_RETRACT, low)]
+    inner = [s.radius / math.cos(s.tilt) for s in sections if s.inner]
+    if inner:
+        out.append(min(inner) - machine.probe.ball_radius - SMALL_BORE_CORE)
+    return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
+
+
+def smallest_bore(machine: MachineProfile) -> float:
+    """The smallest bore diameter the profile's stylus measures, mm: the ball and the
+    smallest retract :func:`_retracts` tries (at least 1.5 margins, and in a small bore
+    one that keeps a safe circle of :data:`SMALL_BORE_CORE`)."""
+    low = LEAST_RETRACT * machine.margin
+    retract = min(low + SMALL_BORE_CORE, max(FALLBACK_RETRACT, low), machine.probe.approach)
+    return 2.0 * (machine.probe.ball_radius + retract)
+
+
+ALTERNATIVE_SECTIONS = {
+    "circle": ((0.25,), (0.75,)),
+    "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
+    "cone": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
+    "sphere": ((0.5, 0.9), (0.3, 0.7)),
+    "torus": ((0.4, 0.65, 0.9), (0.1, 0.35, 0.6)),
+}
+"""Sections tried (fractions of the axial extent) when the default ones of a spec
+without ``sections`` lose touches to the collision check, in order."""
+
+
+def _candidates(resolved: ResolvedRevolved, part: Part | None
+                ) -> Iterator[ResolvedRevolved]:
+    """The resolved feature, then (without spec sections) its alternative sections,
+    each built only when asked for."""
+    yield resolved
+    if resolved.spec.sections is not None:
+        return
+    from probegen.cad.revolved import section_at
+
+    part = _need_part(part, resolved.spec)
+    f = resolved.feature
+    low, high = f.extent
+    for fractions in ALTERNATIVE_SECTIONS[resolved.spec.kind]:
+        sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
+        if all(s.reachable for s in sections):
+            ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
+            yield ResolvedRevolved(resolved.spec, f, ordered)
+
+
+def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z: float,
+               sweeper: Sweeper, errors: list[ProbegenError],
+               retract_only: float | None = None) -> Rerouted | None:
+    """The rerouted plan of one choice of sections with the first retract of
+    :func:`_retracts` (or ``retract_only``) that keeps every touch, else the one that
+    keeps the most (None when none plans; the reasons go to ``errors``)."""
+    feature = resolved.spec
+    sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
+    best: Rerouted | None = None
+    retracts = _retracts(feature, machine, sections) if retract_only is None else (
+        retract_only,)
+    for retract in retracts:
+        try:
+            plan = plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
+                                retract=retract, margin=machine.margin, clear_z=clearance_z)
+            safe = reroute(plan, sweeper)
+        except RerouteError as exc:  # a CollisionError, itself a PlanningError
+            errors.append(RerouteError(f"{feature.where}: {exc}"))
+            continue
+        except PlanningError as exc:
+            errors.append(PlanningError(f"{feature.where}: {exc}"))
+            continue
+        if best is None or len(safe.dropped) < len(best.dropped):
+            best = safe
+        if not safe.dropped:
+            break
+    return best
+
+
+def _touches(plan: FeaturePlan) -> int:
+    return sum(1 for p in plan.path if p.normal is not None)
+
+
+def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
+                  clearance_z: float) -> RevolvedPlan:
+    """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``,
+    made safe against the part (:func:`probegen.planning.reroute.reroute`).
+
+    Tried in order until every touch is kept: the sections (the spec's or the default
+    ones) with the retracts of :func:`_retracts`, then (when the spec gives no sections)
+    :data:`ALTERNATIVE_SECTIONS` with the retract that kept the most touches there; else
+    the plan that keeps the most touches.
+
+    Raises:
+        PlanningError: nothing plans (the first reason).
+        CollisionError: no touch can be made safe (names the move and the face).
+
+    The plan is kept on the part by (spec feature, machine, clearance level):
+    ``--all-revolved`` plans each feature to choose the spec, then the program plans the
+    spec; ``ingest`` plans the program, then each feature again.
+    """
+    loaded = _need_part(part, feature)
+    return loaded.memo(("revolved plan", feature, machine, clearance_z),
+                       lambda: _plan_revolved(feature, loaded, machine, clearance_z))
+
+
+def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
+                   clearance_z: float) -> RevolvedPlan:
+    resolved = resolve_revolved(feature, part)
+    sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
+    errors: list[ProbegenError] = []
+    best: tuple[ResolvedRevolved, Rerouted] | None = None
+    for k, candidate in enumerate(_candidates(resolved, part)):
+        # other sections only with the retract that served the default ones best
+        only = best[1].plan.sections[0].retract if k and best is not None else None
+        safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
+        if safe is None:
+            continue
+        if best is None or _touches(safe.plan) > _touches(best[1].plan):
+            notes = safe.notes if not k else (
+                "default sections lose touches; measured at z = " + ", ".join(
+                    f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
+            best = (candidate, replace(safe, notes=tuple(notes)))
+        if not safe.dropped:
+            break
+    if best is None:
+        raise errors[0]
+    chosen, safe = best
+    return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
+
+
+def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
+                   clearance_z: float) -> tuple[ir.Node, ...]:
+    """The feature's nodes: a rapid above its entry, then its block."""
+    nodes = feature_nodes(p.plan, overtravel=machine.probe.overtravel, clearance_z=clearance_z)
+    return (nodes[0], ir.FeatureBlock(p.definition, nodes[1:]))

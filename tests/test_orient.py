@@ -1,0 +1,453 @@
+"""Orientations and styli (issue 17, item 2): revolved features whose axis is not along +Z
+planned in their own frame on the turned part, with the stylus of the rack that fits, on a
+block built here with build123d (bores on +X, -Y, +Z and -Z faces, a 3 mm bore, an
+inclined hole at 45 deg)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import REPO
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from probegen import cad, ir
+from probegen.cad import part as part_module
+from probegen.errors import CollisionError, PlanningError
+from probegen.ir import frames
+from probegen.machine.profile import Head, MachineProfile, Stylus, Tilt, load_profile
+from probegen.planning import PlannedProgram, plan_program
+from probegen.planning.collision import check_program, obstacle_for
+from probegen.planning.orient import (
+    changes,
+    head_angles,
+    head_direction,
+    order_groups,
+    orient_name,
+    orientation_for,
+)
+from probegen.spec.model import RevolvedSpec, Spec
+
+RACK = (Stylus("D1", 1.0, 0.7, 20.0, 21), Stylus("D2", 2.0, 1.4, 30.0, 22),
+        Stylus("D3", 3.0, 2.0, 40.0, 23), Stylus("D6", 6.0, 4.5, 50.0, 20))
+"""A rack of 1, 2, 3 and 6 mm styli; the 6 mm one is the [probe] stylus (tool 20)."""
+FACES = {"-Y": 7, "+Z": 8, "small": 9, "45": 10, "-Z": 11, "+X": 12}
+"""The bore face of each direction on :func:`block`'s model."""
+
+
+def block(path: Path) -> Path:
+    """A 60 x 60 x 40 block (bottom at z = 0) with D8 bores 10 deep on +Z, +X and -Z, a D6
+    on -Y, a D3 6 deep on +Z and a D6 hole at 45 deg from the top towards -X."""
+    from build123d import Align, Box, Cylinder, Pos, Rot, export_step
+
+    shape = Box(60, 60, 40, align=(Align.CENTER, Align.CENTER, Align.MIN))
+    for cut in (Pos(-15, -15, 40) * Cylinder(4, 20), Pos(30, 10, 20) * Rot(0, 90, 0) *
+                Cylinder(4, 20), Pos(10, -30, 20) * Rot(90, 0, 0) * Cylinder(3, 20),
+                Pos(15, -15, 0) * Cylinder(4, 20), Pos(0, 20, 40) * Cylinder(1.5, 12),
+                Pos(15, 5, 40) * Rot(0, 45, 0) * Cylinder(3, 24)):
+        shape = shape - cut
+    export_step(shape, str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return block(tmp_path_factory.mktemp("orient") / "block.step")
+
+
+def profile(kind: str) -> MachineProfile:
+    """The VMC sample with a CMM head (DMIS) or a five-axis tilt (Fanuc), the rack, and a
+    CMM-like margin of 0.1 mm."""
+    base = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    if kind == "head":
+        return replace(base, dialect="dmis", head=Head(), rack=RACK, margin=0.1)
+    return replace(base, tilt=Tilt(), rack=RACK, margin=0.1)
+
+
+def spec_of(model: Path, machine: MachineProfile, faces: list[int]) -> Spec:
+    features = tuple(RevolvedSpec(f"R{f}", f"block: face {f}", "cylinder", f, None, None, 8,
+                                  None) for f in faces)
+    return Spec(source="block", model=model, machine=machine, dialect=machine.dialect,
+                clearance_z=60.0, program_number=1001, program_name="BLOCK", features=features)
+
+
+ALL = [FACES[k] for k in ("-Y", "+Z", "small", "45", "+X")]
+
+
+@pytest.fixture(scope="module")
+def loaded(model: Path) -> cad.Part:
+    return cad.load_part(model)
+
+
+@pytest.fixture(scope="module", params=["head", "tilt"])
+def planned(request: pytest.FixtureRequest, model: Path, loaded: cad.Part
+            ) -> tuple[str, PlannedProgram]:
+    machine = profile(request.param)
+    spec = spec_of(model, machine, ALL)
+    return request.param, plan_program(spec, runtime_variables=False, part=loaded)
+
+
+# ------------------------------------------------------------------ the turned part
+
+
+def test_turned_part_is_the_model_in_the_frame(loaded: cad.Part,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    meshes = 0
+    tessellate = part_module.tessellate
+
+    def counted(*args: object, **kwargs: object) -> object:
+        nonlocal meshes
+        meshes += 1
+        return tessellate(*args, **kwargs)  # type: ignore[arg-type]
+
+    part = cad.Part(loaded.model)
+    monkeypatch.setattr(part_module, "tessellate", counted)
+    rotation = frames.frame_for((1.0, 0.0, 0.0))
+    turned = part.turned(rotation)
+    assert turned is part.turned(rotation) and turned.rotation == rotation
+    assert turned.original is part and turned.turned(rotation) is turned
+    # frame X = work Y, frame Y = work Z, frame Z = work X
+    assert np.allclose(turned.bbox_min, (-30.0, 0.0, -30.0), atol=1e-6)
+    assert np.allclose(turned.bbox_max, (30.0, 40.0, 30.0), atol=1e-6)
+    assert [f.id for f in turned.faces] == [f.id for f in part.faces]
+    bore = turned.faces[FACES["+X"] - 1]
+    assert np.allclose(np.abs(bore.axis), (0.0, 0.0, 1.0), atol=1e-12)
+    mesh, original = turned.mesh(), part.mesh()
+    assert meshes == 1 and turned.mesh() is mesh
+    assert np.allclose(mesh.vertices, original.vertices @ np.asarray(rotation))
+    assert (mesh.metadata["face_ids"] == original.metadata["face_ids"]).all()
+    point = np.array([25.0, 10.0 + 4.0, 20.0])  # on the +X bore's wall, work
+    d_work, _ = part.exact.distance(FACES["+X"] - 1, point)
+    d_frame, foot = turned.exact.distance(FACES["+X"] - 1, point @ np.asarray(rotation))
+    assert d_work < 1e-9 and d_frame < 1e-9
+    assert turned.exact.inside(np.array([0.0, 20.0, 0.0])) is True  # work (0, 0, 20)
+    assert turned.exact.inside(np.array([0.0, 20.0, 40.0])) is False  # work (40, 0, 20)
+
+
+def test_a_turned_part_finds_its_vertical_features(loaded: cad.Part) -> None:
+    from probegen.cad.revolved import revolved_features
+
+    turned = loaded.turned(frames.frame_for((1.0, 0.0, 0.0)))
+    found = {f.faces: f for f in revolved_features(turned)}
+    assert found[(FACES["+X"],)].accessible
+    assert not found[(FACES["+Z"],)].accessible  # horizontal in this frame
+
+
+# ---------------------------------------------------------------- the orientations
+
+
+@pytest.mark.parametrize(("a", "b", "direction"), [
+    (0.0, 0.0, (0.0, 0.0, 1.0)), (90.0, 0.0, (0.0, 1.0, 0.0)), (90.0, -90.0, (1.0, 0.0, 0.0)),
+    (90.0, 90.0, (-1.0, 0.0, 0.0)), (90.0, 180.0, (0.0, -1.0, 0.0)),
+    (45.0, -90.0, (math.sqrt(0.5), 0.0, math.sqrt(0.5)))])
+def test_head_angles_convention(a: float, b: float, direction: ir.Vec3) -> None:
+    """A from straight down, B counter-clockwise from above, B = 0 stylus towards -Y."""
+    assert np.allclose(head_direction(a, b), direction, atol=1e-12)
+    assert np.allclose(head_angles(direction), (a, b), atol=1e-9)
+
+
+def test_head_orientation_names_grid_and_range() -> None:
+    machine = profile("head")
+    o = orientation_for(machine, (1.0, 0.0, 0.0))
+    assert not isinstance(o, str) and o.head == (90.0, -90.0)
+    assert orient_name(o, 3) == "A90BM90"
+    assert o.rotation == frames.frame_for((1.0, 0.0, 0.0))
+    off = orientation_for(machine, head_direction(37.3, 12.1))
+    assert off == "axis at A 37.3 B 12.1: not on the head's 7.5 deg grid: needs a setup"
+    down = orientation_for(machine, (0.0, 0.0, -1.0))
+    assert isinstance(down, str) and "beyond the head's A range 0..105" in down
+    narrow = replace(machine, head=Head(b=(-90.0, 90.0)))
+    assert "add the B range or a setup" in str(orientation_for(narrow, (0.0, -1.0, 0.0)))
+    identity = orientation_for(machine, (0.0, 0.0, 1.0))
+    assert not isinstance(identity, str) and orient_name(identity, 0) == "A0B0"
+    half = orientation_for(machine, head_direction(37.5, 7.5 + 1e-7))
+    assert not isinstance(half, str) and orient_name(half, 1) == "A37_5B7_5"
+
+
+def test_tilt_orientation() -> None:
+    machine = profile("tilt")
+    o = orientation_for(machine, head_direction(45.0, 30.0))
+    assert not isinstance(o, str)
+    assert dict(o.rotary)["A"] == pytest.approx(45.0)
+    assert np.allclose(frames.from_euler_zxz(dict(o.rotary)["C"], 45.0, 0.0), o.rotation)
+    assert orient_name(o, 2) == "TILT2"
+    down = orientation_for(machine, (0.0, 0.0, -1.0))
+    assert down == "tilt 180.0 deg: beyond the A axis's range -110..110: needs a setup"
+    plain = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    assert "add a [head] or [tilt]" in str(orientation_for(plain, (1.0, 0.0, 0.0)))
+
+
+# ------------------------------------------------------------------- the programs
+
+
+def _touches_in_work(program: ir.Program) -> list[tuple[ir.Touch, ir.Orient | None]]:
+    out = []
+    for node, orient in frames.in_work(program.body):
+        if isinstance(node, ir.FeatureBlock):
+            out += [(t, orient) for t in node.body if isinstance(t, ir.Touch)]
+    return out
+
+
+def test_every_bore_planned_in_its_frame(planned: tuple[str, PlannedProgram],
+                                         loaded: cad.Part) -> None:
+    kind, p = planned
+    ids = {o.plan.spec.id for o in p.oriented}
+    assert ids == {f"R{f}" for f in ALL}
+    heads = {o.plan.spec.id: o.orientation for o in p.oriented}
+    assert heads[f"R{FACES['+Z']}"].identity
+    expected = {"+X": (1.0, 0.0, 0.0), "-Y": (0.0, -1.0, 0.0),
+                "45": (math.sqrt(0.5), 0.0, math.sqrt(0.5))}
+    for key, a in expected.items():
+        o = heads[f"R{FACES[key]}"]
+        assert np.allclose(o.rotation, frames.frame_for(a), atol=1e-12)
+    orients = [n for n in p.program.body if isinstance(n, ir.Orient)]
+    names = [n.name for n in orients]
+    if kind == "head":
+        assert set(names) == {"A90BM90", "A90B180", "A45BM90", "A0B0"}
+    else:
+        assert set(names) == {"TILT1", "TILT2", "TILT3", "TILT0"}
+    assert names[-1] in ("A0B0", "TILT0") and frames.is_identity(orients[-1].rotation)
+    assert orients[-1].clearance_z == 60.0
+    assert p.orientation_changes == len(orients) == 4
+    assert p.stylus_changes == sum(isinstance(n, ir.SelectStylus) for n in p.program.body)
+    # the +X bore's frame: its clearance is the turned top (30) plus the spec's gap (20)
+    plus_x = next(n for n in orients if n.rotation == frames.frame_for((1.0, 0.0, 0.0)))
+    assert plus_x.clearance_z == pytest.approx(50.0)
+
+
+def test_touches_lie_on_the_model_with_the_outward_normal(
+        planned: tuple[str, PlannedProgram], loaded: cad.Part) -> None:
+    _, p = planned
+    touches = _touches_in_work(p.program)
+    assert len(touches) == 8 * 2 * len(ALL)
+    tilted = 0
+    for touch, orient in touches:
+        tilted += orient is not None and not frames.is_identity(orient.rotation)
+        face = int(touch.feature[1:])
+        contact = np.array(touch.contact, dtype=np.float64)
+        distance, _ = loaded.exact.distance(face - 1, contact)
+        assert distance < 1e-6
+        record = loaded.faces[face - 1]
+        axis, origin = np.array(record.axis), np.array(record.origin)
+        radial = contact - origin - np.dot(contact - origin, axis) * axis
+        # a bore: the outward normal (out of material) points to the axis
+        assert np.dot(touch.normal, -radial / np.linalg.norm(radial)) > 1.0 - 1e-9
+    assert tilted == 8 * 2 * 3
+
+
+def test_the_collision_check_passes_and_refuses_a_wrong_orientation_change(
+        planned: tuple[str, PlannedProgram], loaded: cad.Part) -> None:
+    kind, p = planned
+    machine = profile(kind)
+    assert p.clearance.segments
+    kinds = {s.kind for s in p.clearance.segments}
+    assert any(k.startswith("up to the index point of") for k in kinds)
+    assert any(k.startswith("stylus change to") for k in kinds)
+    body = list(p.program.body)
+    k = next(i for i, n in enumerate(body) if isinstance(n, ir.Orient))
+    before = [n for n in body[:k] if isinstance(n, ir.Move)]
+    low = (0.0, 0.0, 45.0)  # above the part (40) but below the clearance level (60)
+    wrong = ir.Program(p.program.setup, (*body[:k], ir.Move(low, ir.MoveMode.RAPID),
+                                         *body[k:]))
+    assert before
+    with pytest.raises(CollisionError, match="expected the old frame's clearance level"):
+        check_program(wrong, obstacle_for(loaded, []), [], machine, part=loaded)
+    # an orientation whose first move goes below its own clearance level
+    orient = body[k]
+    assert isinstance(orient, ir.Orient)
+    shallow = replace(orient, clearance_z=orient.clearance_z + 5.0)
+    with pytest.raises(PlanningError, match="expected its clearance level"):
+        check_program(ir.Program(p.program.setup, (*body[:k], shallow, *body[k + 1:])),
+                      obstacle_for(loaded, []), [], machine, part=loaded)
+
+
+def test_a_face_down_bore_is_left_out_for_a_reason(model: Path, loaded: cad.Part) -> None:
+    for kind, reason in (("head", "beyond the head's A range 0..105: no orientation reaches "
+                                  "this face: needs a setup"),
+                         ("tilt", "tilt 180.0 deg: beyond the A axis's range -110..110")):
+        spec = spec_of(model, profile(kind), [FACES["-Z"]])
+        with pytest.raises(PlanningError, match=reason.replace(".", r"\.")):
+            plan_program(spec, runtime_variables=False, part=loaded)
+
+
+def test_the_stylus_that_fits(planned: tuple[str, PlannedProgram]) -> None:
+    """A 3 mm bore takes the 2 mm ball; the 6 mm bores the 3 mm; the 8 mm ones the 6 mm."""
+    _, p = planned
+    styli = {o.plan.spec.id: o.stylus.label for o in p.oriented}
+    assert styli == {f"R{FACES['small']}": "D2", f"R{FACES['-Y']}": "D3",
+                     f"R{FACES['45']}": "D3", f"R{FACES['+X']}": "D6", f"R{FACES['+Z']}": "D6"}
+    # the ball each feature's touches start from is the ball of its stylus
+    ball = p.program.setup.ball_diameter / 2.0
+    for node in p.program.body:
+        if isinstance(node, ir.SelectStylus):
+            ball = node.ball_diameter / 2.0
+        if isinstance(node, ir.FeatureBlock):
+            plan = next(o for o in p.oriented if o.plan.spec.id == node.feature.id)
+            assert ball == plan.stylus.ball_radius
+
+
+def test_a_forced_stylus(model: Path, loaded: cad.Part) -> None:
+    from probegen.planning.orient import pick_stylus
+
+    machine = profile("head")
+    chosen, value = pick_stylus(machine, lambda m: m.probe.ball_diameter, "D3")
+    assert (chosen.label, value) == ("D3", 3.0)
+    with pytest.raises(PlanningError, match="expected one of D6, D1, D2, D3"):
+        pick_stylus(machine, lambda m: 0, "D9")
+
+
+def test_group_order_has_the_fewest_changes() -> None:
+    start, identity = ("D6", "V"), "V"
+    groups = [("D3", "X"), ("D6", "X"), ("D3", "V"), ("D6", "Y"), ("D2", "V")]
+    order = order_groups(groups, start, identity)
+    import itertools
+
+    best = min(sum(changes(o, start, identity)) for o in itertools.permutations(groups))
+    assert sum(changes(order, start, identity)) == best == 6
+    assert sum(changes(groups, start, identity)) > best
+    assert sorted(order) == sorted(groups)
+
+
+def test_a_vertical_program_has_no_orient(model: Path, loaded: cad.Part) -> None:
+    """Vertical features with the [probe] stylus alone: no Orient, no SelectStylus."""
+    machine = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    p = plan_program(spec_of(model, machine, [FACES["+Z"]]), runtime_variables=True,
+                     part=loaded)
+    assert not any(isinstance(n, (ir.Orient, ir.SelectStylus)) for n in p.program.body)
+    assert (p.stylus_changes, p.orientation_changes) == (0, 0)
+    with pytest.raises(PlanningError, match="not accessible"):
+        plan_program(spec_of(model, machine, [FACES["+X"]]), runtime_variables=True,
+                     part=loaded)
+
+
+def test_ingest_turns_frame_touches_back_to_work(planned: tuple[str, PlannedProgram],
+                                                 model: Path) -> None:
+    """Ball centres printed in the frame (as #5061-#5063 under G68.2) of a bore 0.01 mm
+    larger than nominal: evaluated in work coordinates with the ball of the feature's
+    stylus, the centre and axis where the model has them."""
+    from probegen.evaluate import ingest as ingest_module
+    from probegen.evaluate.revolved import RevolvedResult
+    from probegen.geometry.uncertainty import Budget
+
+    kind, p = planned
+    grow = 0.005  # radius
+    touches: dict[tuple[str, int], ir.Vec3] = {}
+    ball = p.program.setup.ball_diameter / 2.0
+    for node in p.program.body:
+        if isinstance(node, ir.SelectStylus):
+            ball = node.ball_diameter / 2.0
+        if isinstance(node, ir.FeatureBlock):
+            for t in node.body:
+                if isinstance(t, ir.Touch):
+                    c, n = np.array(t.contact, dtype=float), np.array(t.normal)
+                    touches[(t.feature, t.index)] = tuple((c - grow * n + ball * n).tolist())
+
+    class NoGaps:
+        def reason(self, feature: str, indices: object) -> str:
+            return ""
+
+    spec = spec_of(model, profile(kind), ALL)
+    for o in p.oriented:
+        notes: list[str] = []
+        out = ingest_module._revolved(o.plan.spec, spec, o, touches, notes,
+                                      NoGaps(), Budget(), None)  # type: ignore[arg-type]
+        assert isinstance(out, RevolvedResult), notes
+        face = int(o.plan.spec.id[1:])
+        record = p.oriented[0].part.original.faces[face - 1]
+        assert out.diameter == pytest.approx(2.0 * record.radius + 2.0 * grow, abs=1e-6)
+        assert abs(float(np.dot(out.axis, record.axis))) == pytest.approx(1.0, abs=1e-9)
+        off = np.subtract(out.centre, record.origin)
+        assert np.linalg.norm(off - np.dot(off, record.axis) * np.array(record.axis)) < 1e-6
+
+
+def test_all_revolved_reaches_every_side(loaded: cad.Part) -> None:
+    """``--all-revolved`` with a head: every bore but the face-down one, which is left
+    out for a reason; the plan table names each feature's orientation and stylus."""
+    from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
+
+    machine = profile("head")
+    spec, notes = all_revolved_spec(loaded, machine)
+    assert sorted(f.face for f in spec.features) == sorted(ALL)  # type: ignore[union-attr]
+    assert notes == (f"R5 bore D8.000 (cylinder, faces {FACES['-Z']}): axis at A 180.0 B 0.0: "
+                     "beyond the head's A range 0..105: no orientation reaches this face: "
+                     "needs a setup",)
+    p = plan_program(spec, runtime_variables=False, part=loaded)
+    table = metrics_table(p.revolved, machine, p.oriented).splitlines()
+    assert table[0].endswith("orient     stylus  ")
+    rows = {line.split()[0]: line.split()[-2:] for line in table[1:-1]}
+    assert rows["R6"] == ["A90BM90", "D6"]  # recognised feature 6: the +X bore
+    assert rows["R3"] == ["-", "D2"]  # the 3 mm bore, vertical
+    plain = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    _, plain_notes = all_revolved_spec(loaded, plain)
+    assert any("not along the probe: needs an orientation or a setup" in n
+               for n in plain_notes)
+
+
+def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) -> None:
+    from types import SimpleNamespace
+
+    from probegen.planning.left_out import revolved_left_out, smallest_stylus
+    from probegen.planning.revolved_spec import smallest_bore
+
+    machine = profile("head")
+    least = smallest_bore(machine.with_stylus(smallest_stylus(machine)))
+    assert least == pytest.approx(2.0 * (0.5 + 0.15 + 0.25))  # ball + 1.5 margins + core
+    bore = SimpleNamespace(id=9, type="cylinder", inner=True, radius=0.4, minor_radius=None,
+                           faces=(40,), axis=(1.0, 0.0, 0.0))
+    assert revolved_left_out(bore, loaded, machine, "", least) == (
+        "R9 bore D0.800 (cylinder, faces 40): bore D0.800: the smallest stylus D1 (ball "
+        "D1.000) needs D1.800 or more: a smaller stylus")
+
+
+@settings(max_examples=examples(200))
+@given(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.floats(-1.0, 1.0))
+def test_orientation_of_any_direction(x: float, y: float, z: float) -> None:
+    """Any approach direction: the head's angles give it back, and the orientation is on
+    the grid with its frame's Z along it, or a reason."""
+    n = math.sqrt(x * x + y * y + z * z)
+    if n < 1e-3:
+        return
+    a = (x / n, y / n, z / n)
+    big_a, big_b = head_angles(a)
+    assert 0.0 <= big_a <= 180.0 and -180.0 < big_b <= 180.0
+    if math.hypot(a[0], a[1]) > 1e-6:
+        assert np.allclose(head_direction(big_a, big_b), a, atol=1e-9)
+    for kind in ("head", "tilt"):
+        o = orientation_for(profile(kind), a)
+        if isinstance(o, str):
+            assert "needs a setup" in o or "add the B range" in o
+            continue
+        z_axis = np.asarray(o.rotation)[:, 2]
+        assert np.allclose(z_axis, a, atol=1e-9)
+        if o.head is not None:
+            assert all(abs(v / 7.5 - round(v / 7.5)) < 1e-9 for v in o.head)
+
+
+@settings(max_examples=examples(60))
+@given(st.lists(st.tuples(st.sampled_from("ABC"), st.sampled_from("VXYZ")), min_size=1,
+                max_size=5, unique=True))
+def test_group_order_is_optimal(groups: list[tuple[str, str]]) -> None:
+    import itertools
+
+    start = ("A", "V")
+    order = order_groups(groups, start, "V")
+    assert sorted(order) == sorted(groups)
+    best = min(sum(changes(o, start, "V")) for o in itertools.permutations(groups))
+    assert sum(changes(order, start, "V")) == best
+
+
+def test_a_work_offset_update_from_a_turned_feature_is_refused(model: Path,
+                                                               loaded: cad.Part) -> None:
+    from probegen.spec.actions import Actions, WorkOffsetAction
+
+    spec = spec_of(model, profile("head"), [FACES["+X"]])
+    feature = replace(spec.features[0], actions=Actions(  # type: ignore[type-var]
+        work_offset=WorkOffsetAction("G54", "XY")))
+    with pytest.raises(PlanningError, match=r"found a feature measured in a turned frame "
+                                            r"\(A90BM90\)"):
+        plan_program(replace(spec, features=(feature,)), runtime_variables=True, part=loaded)
