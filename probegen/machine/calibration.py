@@ -42,6 +42,18 @@ Calibration file (TOML, written by ``probegen ingest --write-calibration``)::
     radii = [2.9979, ...]                  # effective radius in each direction, mm
     u_radius = 0.0002            # standard uncertainty of the effective radius, mm
                                  # (optional, 0 when absent: files before it)
+    stylus = "D2"                # optional: the rack's stylus it was measured with
+    orientation = "A0B0"         # optional: the head or tilt orientation (default: vertical)
+
+A probe of several styli, or a CMM head used in several orientations, has one entry per
+stylus and orientation: ``[[calibration]]`` tables (an array), each with the keys above and
+``stylus`` required, no two of the same stylus and orientation.  The radius map of every
+entry is in the probe's own frame (``directions``: from the ball's centre, the stylus
+along -Z), so a stylus calibrated at A0B0 is, to first order, calibrated at any
+orientation: :meth:`ProbeCalibration.entry_for` takes the entry of the stylus and
+orientation asked for, else the stylus's vertical entry (``A0B0``, ``TILT0`` or no
+orientation), else the one entry of a file that names no stylus (every file written
+before issue 17), and refuses otherwise (``docs/results.md``, "Probe calibration").
 """
 
 from __future__ import annotations
@@ -49,7 +61,8 @@ from __future__ import annotations
 import datetime
 import hashlib
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +71,13 @@ from numpy.typing import ArrayLike, NDArray
 from probegen.errors import SpecError
 from probegen.files import Table, load_toml
 
+VERTICAL_NAMES = ("", "A0B0", "TILT0", "VERTICAL")
+"""Names of the vertical probe's orientation (no name, a CMM head's, a five-axis
+machine's, probegen's own): all the same orientation."""
+ORIENTATION = re.compile(r"[A-Z0-9_]{1,16}\Z")
+"""An orientation name (``ir.Orient.name``)."""
+STYLUS_LABEL = re.compile(r"[A-Z0-9_]{1,8}\Z")
+"""A stylus label (``machine.rack.LABEL``)."""
 IDW_POWER = 4.0
 """Power of the inverse-distance weights: high enough that a direction's own radius
 dominates near it, low enough to blend smoothly between the measured directions."""
@@ -78,6 +98,12 @@ class ProbeCalibration:
         u_radius: standard uncertainty of the effective radius, mm (from the sphere
             test's fit; 0 when the file does not state it).
         date: when the sphere test ran (ISO 8601, from ``--calibration-date``), or "".
+        stylus: the label of the stylus it was measured with, or "" (not stated).
+        orientation: the orientation it was measured in, or "" (the vertical probe;
+            ``A0B0`` and ``TILT0`` are the same).
+        others: the other entries of the same file (a file of several styli or
+            orientations); the fields above are the entry in use
+            (:meth:`entry_for` picks another).
     """
 
     ball_radius: float
@@ -87,19 +113,63 @@ class ProbeCalibration:
     source: str = ""
     u_radius: float = 0.0
     date: str = ""
+    stylus: str = ""
+    orientation: str = ""
+    others: tuple[ProbeCalibration, ...] = ()
 
     @property
     def fingerprint(self) -> str:
         """A short identity: ``C`` and 8 hex digits of the SHA-256 of the file text
-        (a letter first, so it prints and reads as one DPRNT word)."""
+        (a letter first, so it prints and reads as one DPRNT word); the same for every
+        entry of one file."""
         digest = hashlib.sha256(calibration_toml(self).encode("utf-8")).hexdigest()
         return "C" + digest[:8].upper()
 
     def describe(self) -> str:
-        """One line for every output: source, date and fingerprint."""
-        return (f"calibrated: {self.source or 'unknown source'}, "
+        """One line for every output: source, date and fingerprint (and the stylus and
+        orientation of an entry that names them)."""
+        pair = f"stylus {self.stylus} {self.orientation or 'vertical'}, " \
+            if self.stylus else ""
+        return (f"calibrated: {pair}{self.source or 'unknown source'}, "
                 f"{self.date or 'undated'}, fingerprint {self.fingerprint}, "
                 f"effective radius {self.effective_radius:.4f} mm")
+
+    @property
+    def entries(self) -> tuple[ProbeCalibration, ...]:
+        """Every entry of the file, each without ``others``, sorted by stylus and
+        orientation (one: a file of one entry)."""
+        every = (replace(self, others=()), *self.others)
+        return tuple(sorted(every, key=lambda e: (e.stylus, e.orientation)))
+
+    def entry_for(self, stylus: str, orientation: str = "", where: str = ""
+                  ) -> ProbeCalibration:
+        """The entry of ``stylus`` (a rack label) in ``orientation`` (a head or tilt
+        orientation name; "", ``A0B0``, ``TILT0``: the vertical probe), with the file's
+        other entries kept in ``others`` (the fingerprint is the file's).
+
+        Falls back to the stylus's vertical entry (the map is in the probe frame), then
+        to the one entry of a file that names no stylus.
+
+        Raises:
+            SpecError: no entry fits; names ``where``, the pair and the entries held.
+        """
+        every = self.entries
+        vertical = _vertical(orientation)
+        for fits in (lambda e: e.stylus == stylus and _same(e.orientation, orientation),
+                     lambda e: e.stylus == stylus and _vertical(e.orientation),
+                     lambda e: not e.stylus and len(every) == 1):
+            found = [e for e in every if fits(e)]
+            if found:
+                chosen = found[0]
+                return replace(chosen, others=tuple(e for e in every if e is not chosen))
+        held = ", ".join(f"{e.stylus or 'unnamed'} {e.orientation or 'vertical'}"
+                         for e in every)
+        asked = f"stylus {stylus}" + ("" if vertical else f" in orientation {orientation}")
+        raise SpecError(f"{where or self.source}: expected a probe calibration of {asked} "
+                        f"(or of its vertical orientation), found entries for {held} only; "
+                        "run the sphere test with that stylus and add its entry "
+                        "([[calibration]] with stylus and orientation), or measure without "
+                        "a calibration (nominal ball radius)")
 
     def radius(self, normals: ArrayLike) -> NDArray[np.float64]:
         """Effective radius for each approach normal ``normals : (n, 3)``; returns (n,).
@@ -200,6 +270,29 @@ def for_stylus(calibration: ProbeCalibration | None, ball_radius: float,
     return calibration
 
 
+def stylus_calibration(calibration: ProbeCalibration | None, stylus: str, ball_radius: float,
+                       orientation: str, where: str) -> ProbeCalibration | None:
+    """The entry of ``calibration`` for ``stylus`` (a label, ball of ``ball_radius`` mm)
+    in ``orientation`` (:meth:`ProbeCalibration.entry_for`, checked by :func:`for_stylus`),
+    or None without a calibration (the nominal radius).
+
+    Raises:
+        SpecError: no entry fits, or the entry is of another ball.
+    """
+    if calibration is None:
+        return None
+    return for_stylus(calibration.entry_for(stylus, orientation, where), ball_radius, where)
+
+
+def _vertical(name: str) -> bool:
+    return name in VERTICAL_NAMES
+
+
+def _same(a: str, b: str) -> bool:
+    """Whether orientation names ``a`` and ``b`` are the same orientation."""
+    return a == b or _vertical(a) and _vertical(b)
+
+
 def calibration_state(calibration: ProbeCalibration | None) -> dict[str, object]:
     """The calibration as every output records it (``results.json`` ``calibration``)."""
     if calibration is None:
@@ -240,10 +333,33 @@ def compensate(centres: ArrayLike, normals: ArrayLike,
 
 
 def load_calibration(path: str | Path) -> ProbeCalibration:
-    """Read a calibration file (see the module docstring); errors name file and key."""
+    """Read a calibration file (see the module docstring); errors name file and key.
+
+    A file of several entries (``[[calibration]]``) gives its first entry in file order
+    with the others in ``others``."""
     file = str(path)
     root = Table(load_toml(path), file, "")
-    t = root.table("calibration", required=True)
+    several = isinstance(root.get_any("calibration"), list)
+    tables = root.tables("calibration") if several else \
+        [root.table("calibration", required=True)]
+    if not tables:
+        raise root.fail("calibration", "at least one [[calibration]] entry")
+    entries = [_entry(t, several) for t in tables]
+    seen: dict[tuple[str, bool | str], str] = {}
+    for t, e in zip(tables, entries, strict=True):
+        key = (e.stylus, True if _vertical(e.orientation) else e.orientation)
+        if key in seen:
+            raise SpecError(f"{t.where('orientation')}: expected one entry per stylus and "
+                            f"orientation, found stylus {e.stylus} "
+                            f"{e.orientation or 'vertical'} again (first at "
+                            f"{seen[key]})")
+        seen[key] = t.path
+    root.done()
+    return replace(entries[0], others=tuple(entries[1:]))
+
+
+def _entry(t: Table, several: bool) -> ProbeCalibration:
+    """One entry; ``several``: of a file of several, where ``stylus`` is required."""
     directions = t.get_any("directions", [])
     radii = t.get_any("radii", [])
     cal = ProbeCalibration(
@@ -254,13 +370,23 @@ def load_calibration(path: str | Path) -> ProbeCalibration:
         source=t.get_str("source", "") or "",
         u_radius=t.get_float("u_radius", 0.0, minimum=0.0, maximum=1.0) or 0.0,
         date=_date(t),
+        stylus=_name(t, "stylus", STYLUS_LABEL, several, "1-8 of A-Z 0-9 _ (a stylus label "
+                                                       "of the machine's rack)"),
+        orientation=_name(t, "orientation", ORIENTATION, False, "1-16 of A-Z 0-9 _ (an "
+                                                               "orientation name: A90B90)"),
     )
     if len(cal.directions) != len(cal.radii):
         raise SpecError(f"{t.where('radii')}: expected one radius per direction "
                         f"({len(cal.directions)}), found {len(cal.radii)}")
     t.done()
-    root.done()
     return cal
+
+
+def _name(t: Table, key: str, pattern: re.Pattern[str], required: bool, what: str) -> str:
+    text = t.get_str(key, "", required=required) or ""
+    if text and not pattern.match(text):
+        raise t.fail(key, what)
+    return text
 
 
 def _date(t: Table) -> str:
@@ -291,13 +417,23 @@ def _radii(t: Table, value: object) -> tuple[float, ...]:
 
 
 def calibration_toml(cal: ProbeCalibration) -> str:
-    """The calibration as TOML text (fixed decimals, repeatable)."""
+    """The calibration as TOML text (fixed decimals, repeatable): ``[calibration]`` for a
+    file of one entry, ``[[calibration]]`` entries sorted by stylus and orientation for
+    several."""
+    entries = cal.entries
+    head = "[[calibration]]" if len(entries) > 1 else "[calibration]"
+    return ("# Probe calibration written by probegen (sphere test, method M1).\n"
+            + "\n".join(_entry_toml(e, head) for e in entries))
+
+
+def _entry_toml(cal: ProbeCalibration, head: str) -> str:
     dirs = ",\n    ".join(f"[{x:.9f}, {y:.9f}, {z:.9f}]" for x, y, z in cal.directions)
     radii = ", ".join(f"{r:.7f}" for r in cal.radii)
     return (
-        "# Probe calibration written by probegen (sphere test, method M1).\n"
-        "[calibration]\n"
-        f"ball_radius = {cal.ball_radius:.7f}\n"
+        f"{head}\n"
+        + (f"stylus = {_quote(cal.stylus)}\n" if cal.stylus else "")
+        + (f"orientation = {_quote(cal.orientation)}\n" if cal.orientation else "")
+        + f"ball_radius = {cal.ball_radius:.7f}\n"
         f"effective_radius = {cal.effective_radius:.7f}\n"
         f"source = {_quote(cal.source)}\n"
         + (f"date = {_quote(cal.date)}\n" if cal.date else "")

@@ -2,7 +2,9 @@
 
 A profile is a TOML file (``samples/machines/vmc-fanuc.toml`` is the reference).  All
 lengths in the profile's ``units`` (mm or inch) are converted to mm on load; feeds are
-per minute.
+per minute.  The stylus rack, a CMM's indexable head, a five-axis machine's tilted plane
+and named setups (``[[probe.stylus]]``, ``[head]``, ``[tilt]``, ``[[setup]]``) are read
+and checked by :mod:`probegen.machine.rack`, whose records this module re-exports.
 """
 
 from __future__ import annotations
@@ -15,6 +17,17 @@ from typing import TYPE_CHECKING
 from probegen.constants import MM_PER_INCH
 from probegen.errors import SpecError, did_you_mean
 from probegen.files import Table, load_toml
+from probegen.machine.rack import (
+    Head,
+    NamedSetup,
+    Stylus,
+    Tilt,
+    probe_stylus,
+    read_head,
+    read_rack,
+    read_setups,
+    read_tilt,
+)
 
 if TYPE_CHECKING:
     from probegen.machine.calibration import ProbeCalibration
@@ -182,92 +195,6 @@ class StatedUncertainty:
 
 
 @dataclass(frozen=True, slots=True)
-class Stylus:
-    """One stylus of the rack (issue 17): ``[[probe.stylus]]`` in the profile.
-
-    Attributes:
-        label: upper-case ``[A-Z0-9_]`` name, the DMIS sensor label (``S(label)``).
-        ball_diameter: mm.
-        shank_diameter: mm.
-        length: ball centre to the probe body, mm.
-        tool_number: tool and length-offset number on a machine tool.
-        offset: a star stylus's tip offset from the probe axis, mm (frame of the vertical
-            probe), (0, 0, 0) for a straight stylus.
-    """
-
-    label: str
-    ball_diameter: float
-    shank_diameter: float
-    length: float
-    tool_number: int
-    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-    @property
-    def ball_radius(self) -> float:
-        """Half the ball diameter, mm."""
-        return self.ball_diameter / 2.0
-
-
-@dataclass(frozen=True, slots=True)
-class Head:
-    """A CMM's indexable probe head (``[head]``, like a Renishaw PH10): ``A`` tilts the
-    stylus from straight down (0) towards the horizontal (90) and beyond, ``B`` turns it
-    about the vertical; both in ``step`` increments.
-
-    Attributes:
-        a: the A range, deg.
-        b: the B range, deg.
-        step: the index step, deg.
-        body_diameter: the probe body and head's diameter for the collision check, mm.
-        body_length: from the stylus's end to the head's turning centre, mm.
-    """
-
-    a: tuple[float, float] = (0.0, 105.0)
-    b: tuple[float, float] = (-180.0, 180.0)
-    step: float = 7.5
-    body_diameter: float = 25.0
-    body_length: float = 60.0
-
-
-@dataclass(frozen=True, slots=True)
-class Tilt:
-    """A five-axis machine's 3+2 positioning with a tilted work plane (``[tilt]``).
-
-    Attributes:
-        command: ``G68.2`` (Fanuc, with ``G53.1``), ``G268`` (Haas NGC, with ``G253``).
-        tilt_axis: the axis that tilts (``A`` or ``B``).
-        rotary_axis: the rotary table's axis (``C``).
-        tilt_range: the tilt axis's travel, deg.
-        rotary_range: the rotary axis's travel, deg (a continuous table: -360, 360).
-    """
-
-    command: str = "G68.2"
-    tilt_axis: str = "A"
-    rotary_axis: str = "C"
-    tilt_range: tuple[float, float] = (-110.0, 110.0)
-    rotary_range: tuple[float, float] = (-360.0, 360.0)
-
-
-@dataclass(frozen=True, slots=True)
-class NamedSetup:
-    """A named setup (``[[setup]]``): the part turned on the table, one program each.
-
-    Attributes:
-        name: upper-case ``[A-Z0-9_]`` name.
-        rotation: the part's turn, rows (part coordinates → table frame: ``p_table =
-            R·p_part + origin``).
-        origin: mm.
-        note: the fixture note printed in the program header.
-    """
-
-    name: str
-    rotation: tuple[tuple[float, float, float], tuple[float, float, float],
-                    tuple[float, float, float]]
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    note: str = ""
-
-
-@dataclass(frozen=True, slots=True)
 class MachineProfile:
     """A machine as probegen needs to know it."""
 
@@ -298,15 +225,11 @@ class MachineProfile:
     @property
     def stylus(self) -> Stylus:
         """The stylus of ``[probe]`` (the one in the spindle or head when a program
-        starts): the rack's entry with its tool number and ball, else one labelled
-        ``PRB<tool number>``."""
+        starts): the rack's entry with its ball, shank and length and its tool number
+        (or none, on a CMM), else one labelled ``PRB<tool number>``."""
         p = self.probe
-        for s in self.rack:
-            if (s.tool_number, s.ball_diameter, s.shank_diameter, s.length) == (
-                    p.tool_number, p.ball_diameter, p.shank_diameter, p.length):
-                return s
-        return Stylus(f"PRB{p.tool_number}", p.ball_diameter, p.shank_diameter, p.length,
-                      p.tool_number)
+        return probe_stylus(self.rack, p.tool_number, p.ball_diameter, p.shank_diameter,
+                            p.length)
 
     def styli(self) -> tuple[Stylus, ...]:
         """Every stylus a program may take: the ``[probe]`` stylus first, then the rack's
@@ -316,11 +239,25 @@ class MachineProfile:
 
     def with_stylus(self, s: Stylus) -> MachineProfile:
         """This profile with ``s`` as its probe's stylus (approach, overtravel, feeds
-        and everything else kept): how a feature is planned with another stylus."""
+        and everything else kept): how a feature is planned with another stylus.  A
+        calibration is switched to the stylus's entry (its vertical one; the orientation
+        planner asks for another with ``calibration.entry_for``).
+
+        Raises:
+            SpecError: the profile has a calibration without an entry for ``s``, or one
+                of another ball (a program compiled with a calibration is calibrated for
+                every stylus it takes).
+        """
+        from probegen.machine.calibration import stylus_calibration
+
         probe = replace(self.probe, ball_diameter=s.ball_diameter,
                         shank_diameter=s.shank_diameter, length=s.length,
                         tool_number=s.tool_number)
-        return replace(self, probe=probe)
+        cal = self.calibration
+        if cal is not None:
+            cal = stylus_calibration(cal, s.label, s.ball_radius, "",
+                                     f"probe calibration {cal.fingerprint}")
+        return replace(self, probe=probe, calibration=cal)
 
     def check_program_number(self, number: int, where: str) -> None:
         """Refuse a program number outside ``controller.program_numbers``.
@@ -365,6 +302,10 @@ def load_profile(path: str | Path) -> MachineProfile:
     units = m.get_str("units", "mm", choices=("mm", "inch")) or "mm"
     k = MM_PER_INCH if units == "inch" else 1.0
     dialect = m.get_str("dialect", "fanuc") or "fanuc"
+    probe_table = root.table("probe", required=True)
+    probe = _probe(probe_table, k)
+    controller = _controller(root.table("controller"), dialect)
+    first = (probe.tool_number, probe.ball_diameter, probe.shank_diameter, probe.length)
     profile = MachineProfile(
         name=m.get_str("name", required=True) or "",
         dialect=dialect,
@@ -372,17 +313,24 @@ def load_profile(path: str | Path) -> MachineProfile:
         work_offset=_work_offset(m, dialect),
         clearance_z=k * (m.get_float("clearance_z", required=True) or 0.0),
         margin=k * (m.get_float("margin", 0.5, positive=True) or 0.5),
-        probe=_probe(root.table("probe", required=True), k),
+        probe=probe,
         feeds=_feeds(root.table("feeds", required=True), k),
-        controller=_controller(root.table("controller"), dialect),
+        controller=controller,
         source=file,
         uncertainty=_uncertainty(root.table("uncertainty"), k),
+        rack=read_rack(probe_table, k, dialect, first, controller.tool_change),
+        head=read_head(root, k, dialect),
+        tilt=read_tilt(root, dialect),
+        setups=read_setups(root, k),
     )
+    probe_table.done()
     m.done()
     root.done()
     if EXTENDED_OFFSET.match(profile.work_offset):
         profile.require(profile.work_offset.split()[0], f"{file}: machine.work_offset",
                         f"work offset {profile.work_offset}")
+    if profile.tilt is not None and profile.tilt.command == "G68.2":
+        profile.require("G68.2", root.where("tilt.command"), "[tilt] command = \"G68.2\"")
     return profile
 
 
@@ -424,7 +372,6 @@ def _probe(t: Table, k: float) -> Probe:
     )
     if probe.shank_diameter > probe.ball_diameter:
         raise t.fail("shank_diameter", f"at most ball_diameter ({ball:g})")
-    t.done()
     return probe
 
 

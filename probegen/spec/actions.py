@@ -147,6 +147,8 @@ class PlanarSpec:
             probe's approach.
         tolerance: limits for pass/fail.
         actions: the run-time decisions.
+        stylus: the label of the rack's stylus the spec forces (``stylus = "D2"``), or
+            None: the planner picks.
     """
 
     id: str
@@ -158,6 +160,7 @@ class PlanarSpec:
     retract: float | None
     tolerance: PlanarTolerance = PlanarTolerance()
     actions: Actions = Actions()
+    stylus: str | None = None
 
 
 def read_actions(t: Table, k: float, axes_allowed: str) -> Actions:

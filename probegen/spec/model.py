@@ -43,6 +43,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     sections = [10.0, 40.0]        # depths below the feature's top end (default: recognised)
     points = 8                     # per section
     retract = 2.0                  # optional; the M2 safe distance
+    stylus = "D2"                  # optional: the rack's stylus to use (default: the
+                                   # largest that plans it; also on lines, planes, freeform)
     tolerance = { diameter = [0.0, 0.025], position = 0.05, form = 0.01 }
     # position: the zone diameter; form_method = "least_squares" in the tolerance
     # table overrides [evaluation] for this feature
@@ -76,6 +78,7 @@ from probegen.errors import ProbegenError, SpecError, did_you_mean
 from probegen.files import Table, load_toml
 from probegen.geometry.uncertainty import DECISION_RULES
 from probegen.machine.profile import MachineProfile, load_profile
+from probegen.machine.rack import dialect_problem
 from probegen.spec.actions import (
     FORM_METHODS,
     PLANAR_KINDS,
@@ -214,6 +217,8 @@ class RevolvedSpec:
         retract: the M2 safe distance ``d`` (mm), or None for the probe's approach.
         tolerance: limits for pass/fail.
         actions: run-time decisions (``spec_actions``; circles and cylinders).
+        stylus: the label of the rack's stylus the spec forces (``stylus = "D2"``), or
+            None: the planner picks (``planning.styli``).
     """
 
     id: str
@@ -226,6 +231,7 @@ class RevolvedSpec:
     retract: float | None
     tolerance: RevolvedTolerance = RevolvedTolerance()
     actions: Actions = Actions()
+    stylus: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -248,6 +254,7 @@ class FreeformSpec:
         retract: approach distance of every touch, mm, or None for the probe's.
         deviation: lowest and highest allowed deviation along the nominal normal
             (+ = material added), mm, or None.
+        stylus: the label of the rack's stylus the spec forces, or None.
     """
 
     id: str
@@ -263,6 +270,7 @@ class FreeformSpec:
     extra_spacing: float
     retract: float | None
     deviation: tuple[float, float] | None = None
+    stylus: str | None = None
 
 
 Feature = SphereTest | RevolvedSpec | PlanarSpec | FreeformSpec
@@ -319,11 +327,11 @@ def load_spec(path: str | Path) -> Spec:
         source=file,
         model=base / model_name if model_name else None,
         machine=machine,
-        dialect=m.get_str("dialect", machine.dialect) or machine.dialect,
+        dialect=_dialect(m, machine),
         clearance_z=_clearance(m, machine, k),
         program_number=prog.get_int("number", 1001, minimum=1, maximum=9999) or 1001,
         program_name=_program_name(prog),
-        features=_features(root, k, evaluation[1]),
+        features=_features(root, k, evaluation[1], machine),
         decision_rule=evaluation[0],
         part_number=number,
         part_name=name,
@@ -364,14 +372,26 @@ def _machine(t: Table, base: Path) -> MachineProfile:
     cal = t.get_str("calibration")
     if not cal:
         return profile
-    from probegen.machine.calibration import for_stylus, load_calibration
+    from probegen.machine.calibration import load_calibration, stylus_calibration
 
     try:
         calibration = load_calibration(base / cal)
     except (SpecError, ProbegenError) as exc:
         raise SpecError(f"{t.where('calibration')}: in the probe calibration: {exc}") from None
-    for_stylus(calibration, profile.probe.ball_radius, t.where("calibration"))
-    return dataclasses.replace(profile, calibration=calibration)
+    chosen = stylus_calibration(calibration, profile.stylus.label, profile.probe.ball_radius,
+                                "", t.where("calibration"))
+    return dataclasses.replace(profile, calibration=chosen)
+
+
+def _dialect(t: Table, machine: MachineProfile) -> str:
+    """``[machine] dialect``: the profile's, or another its rack, head and tilt allow."""
+    dialect = t.get_str("dialect", machine.dialect) or machine.dialect
+    problem = dialect_problem(machine.rack, machine.head, machine.tilt, dialect)
+    if problem:
+        raise SpecError(f"{t.where('dialect')}: expected a dialect the machine profile "
+                        f"({machine.source}, dialect {machine.dialect}) can drive, found "
+                        f"{dialect!r}: {problem}")
+    return dialect
 
 
 def _clearance(t: Table, machine: MachineProfile, k: float) -> float:
@@ -386,11 +406,12 @@ def _program_name(t: Table) -> str:
     return name
 
 
-def _features(root: Table, k: float, form_method: str) -> tuple[Feature, ...]:
+def _features(root: Table, k: float, form_method: str,
+              machine: MachineProfile | None = None) -> tuple[Feature, ...]:
     tables = root.tables("feature")
     if not tables:
         raise SpecError(f"{root.file}: feature: expected at least one [[feature]], found none")
-    features = tuple(_feature(t, k, form_method) for t in tables)
+    features = tuple(_feature(t, k, form_method, machine) for t in tables)
     seen: set[str] = set()
     for t, f in zip(tables, features, strict=True):
         if f.id in seen:
@@ -399,7 +420,8 @@ def _features(root: Table, k: float, form_method: str) -> tuple[Feature, ...]:
     return features
 
 
-def _feature(t: Table, k: float, form_method: str = "minimum_zone") -> Feature:
+def _feature(t: Table, k: float, form_method: str = "minimum_zone",
+             machine: MachineProfile | None = None) -> Feature:
     fid = t.get_str("id", required=True) or ""
     if not _ID.match(fid):
         raise t.fail("id", "an id of 1-12 upper-case letters and digits, starting with a letter")
@@ -416,8 +438,24 @@ def _feature(t: Table, k: float, form_method: str = "minimum_zone") -> Feature:
         feature = read_planar(t, fid, kind, k, form_method)
     else:
         feature = _revolved(t, fid, kind, k, form_method)
+    if not isinstance(feature, SphereTest):
+        feature = dataclasses.replace(feature, stylus=_stylus(t, machine))
     t.done()
     return feature
+
+
+def _stylus(t: Table, machine: MachineProfile | None) -> str | None:
+    """``stylus = "D2"``: a label of the machine's rack (checked when the machine is
+    known), or None."""
+    label = t.get_str("stylus")
+    if label is None or machine is None:
+        return label
+    labels = [s.label for s in machine.styli()]
+    if label not in labels:
+        raise SpecError(f"{t.where('stylus')}: expected a stylus of the machine's rack "
+                        f"({', '.join(labels)}; {machine.source}: [[probe.stylus]]), found "
+                        f"{label!r}{did_you_mean(label, labels)}")
+    return label
 
 
 def _scaled(v: tuple[float, ...] | None, k: float) -> Vec3 | None:

@@ -1,0 +1,109 @@
+"""Which stylus of the rack measures a feature (issue 17).
+
+The rule a CMM programmer follows: the largest ball that reaches every point with the
+margin (a larger ball filters the surface's roughness less, bends less and is less
+likely to break), and of two equal balls the shorter stylus (stiffer; the longer one is
+tried next, for the depth it reaches).  :func:`pick_stylus` plans the feature with each
+stylus in that order (the caller's ``plan_with``, handed ``machine.with_stylus(s)``) and
+keeps the first plan that succeeds; a spec's ``stylus = "D2"`` forces one.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import TypeVar
+
+from probegen.errors import PlanningError, SpecError
+from probegen.machine.profile import MachineProfile, Stylus
+
+T = TypeVar("T")
+
+SAID_LENGTH = 90
+"""Longest excerpt of each stylus's error in the message when none plans, characters."""
+
+
+def rack_order(machine: MachineProfile) -> tuple[Stylus, ...]:
+    """Every stylus of ``machine`` in the order they are tried: largest ball first, then
+    shorter, then thicker shank, then label (repeatable)."""
+    return tuple(sorted(machine.styli(), key=lambda s: (-s.ball_diameter, s.length,
+                                                        -s.shank_diameter, s.label)))
+
+
+def smallest_stylus(machine: MachineProfile) -> Stylus:
+    """The stylus tried last: the smallest ball (and of equal balls the longest, which
+    reaches deepest); what a feature too small for the whole rack is left out for."""
+    return rack_order(machine)[-1]
+
+
+def stylus_named(machine: MachineProfile, label: str, where: str) -> Stylus:
+    """The stylus labelled ``label``.
+
+    Raises:
+        SpecError: no stylus of the profile has it; names ``where`` and the labels.
+    """
+    for s in machine.styli():
+        if s.label == label:
+            return s
+    labels = ", ".join(s.label for s in rack_order(machine))
+    raise SpecError(f"{where}: expected a stylus of the machine's rack ({labels}; "
+                    f"{machine.source}: [[probe.stylus]]), found {label!r}")
+
+
+def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T],
+                force: str | None = None) -> tuple[Stylus, T]:
+    """The stylus a feature is measured with, and its plan.
+
+    Args:
+        machine: the profile; its rack (``machine.styli()``) is tried in
+            :func:`rack_order`.
+        plan_with: plans the feature on a profile (``machine.with_stylus(s)``; the
+            profile itself for its ``[probe]`` stylus); raises ``PlanningError`` (or
+            ``CollisionError``) when it cannot.
+        force: a stylus label (a spec's ``stylus`` key): plan with that one only.
+
+    Returns:
+        The first stylus whose plan succeeds, and that plan.
+
+    Raises:
+        SpecError: ``force`` names no stylus of the rack.
+        PlanningError: no stylus plans the feature: the error of the smallest stylus (of
+            its class), with what each stylus said; any other error of ``plan_with``
+            goes through at once.
+    """
+    if force is not None:
+        s = stylus_named(machine, force, "stylus")
+        return s, plan_with(_profile(machine, s))
+    failures: list[tuple[Stylus, PlanningError]] = []
+    for s in rack_order(machine):
+        try:
+            return s, plan_with(_profile(machine, s))
+        except PlanningError as exc:
+            failures.append((s, exc))
+    raise _none_plans(failures)
+
+
+def _profile(machine: MachineProfile, s: Stylus) -> MachineProfile:
+    return machine if s == machine.stylus else machine.with_stylus(s)
+
+
+def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
+    """The smallest stylus's error with a sentence of what every stylus said (one stylus:
+    its error unchanged)."""
+    last = failures[-1][1]
+    if len(failures) == 1:
+        return last
+    texts = [str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+             for _, exc in failures]
+    common = os.path.commonprefix(texts)
+    cut = common.rfind(": ") + 2 if ": " in common else 0
+    said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
+                     for (s, _), text in zip(failures, texts, strict=True))
+    return type(last)(f"{last} (no stylus of the rack plans it, largest first: {said})")
+
+
+def _short(text: str) -> str:
+    """``text`` cut to :data:`SAID_LENGTH` characters at a word."""
+    if len(text) <= SAID_LENGTH:
+        return text
+    return text[:SAID_LENGTH].rsplit(" ", 1)[0] + " ..."
