@@ -20,8 +20,8 @@ if TYPE_CHECKING:
 def _compile(args: argparse.Namespace) -> int:
     from probegen.cli.progress import Bar
     from probegen.dialects import get_dialect
-    from probegen.dialects.split import fit
-    from probegen.planning import check_options, part_of, plan_program
+    from probegen.planning import check_options, part_of
+    from probegen.planning.setups import plan_setups, setup_file
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
@@ -40,35 +40,68 @@ def _compile(args: argparse.Namespace) -> int:
         if part is None:
             part = part_of(spec)  # loaded once, for every dialect
         with Bar(f"planning for {name}", unit="steps") as bar:
-            planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
-                                   progress=bar, part=part)
-        compact = args.compact or (args.compact is None and dialect.COMPACT_DEFAULT
-                                   and args.output != "-")  # stdout: self-contained
-        dialect.compact = bool(compact) and dialect.MACRO_LIBRARY  # DMIS: inline
-        if dialect.COMPACT_DEFAULT and args.compact is None and args.output == "-":
-            print(f"note: the {name} program on stdout is the inline form (every skip move "
-                  "in it); with -o FOLDER compile writes the compact form and its macro "
-                  "library", file=sys.stderr)
-        library = checked_library(dialect, spec.machine) if dialect.compact else {}
-        fitted = fit(dialect, planned.program, library)
-        check_part_numbers(fitted, spec, library)
-        if args.output == "-":
-            if fitted.parts:
-                raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
-                                    f"stdout; the {name} program is split into "
-                                    f"{len(fitted.parts)} parts, written beside it")
-            sys.stdout.write(fitted.main)
-            continue
-        target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
-        write_file(target, fitted.main, f"the {name} program", encoding="ascii")
-        write_parts(target, fitted, written)
-        write_library(target.parent, library)
-        outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
+            setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
+                                 progress=bar, part=part)
+        target = None
+        if args.output == "-" and len(setups) > 1:
+            raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
+                                f"stdout; the spec's features are measured in "
+                                f"{len(setups)} setups "
+                                f"({', '.join(sp.name for sp, _ in setups)}), one program "
+                                "each")
+        if args.output != "-":
+            target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
+        for k, (sp, planned) in enumerate(setups):
+            path = None if target is None else Path(setup_file(str(target), sp, k == 0))
+            outputs += _compile_one(args, name, dialect, sp.spec, planned, path, written,
+                                    sp.name if len(setups) > 1 else "", sp.features)
+    _print_compiled(spec, outputs)
+    return ExitCode.OK
+
+
+def _compile_one(args: argparse.Namespace, name: str, dialect: Any, spec: Any, planned: Any,
+                 target: Path | None, written: dict[Path, str], setup: str,
+                 features: tuple[str, ...]) -> list[tuple[Path, Any, bool, str]]:
+    """Write one planned program of ``compile`` (a setup's, or the only one) to ``target``
+    (None: stdout); the (file, plan, runs on the control, setup text) to print."""
+    from probegen.dialects.split import fit
+
+    compact = args.compact or (args.compact is None and dialect.COMPACT_DEFAULT
+                               and args.output != "-")  # stdout: self-contained
+    dialect.compact = bool(compact) and dialect.MACRO_LIBRARY  # DMIS: inline
+    if dialect.COMPACT_DEFAULT and args.compact is None and args.output == "-":
+        print(f"note: the {name} program on stdout is the inline form (every skip move "
+              "in it); with -o FOLDER compile writes the compact form and its macro "
+              "library", file=sys.stderr)
+    library = checked_library(dialect, spec.machine) if dialect.compact else {}
+    fitted = fit(dialect, planned.program, library)
+    check_part_numbers(fitted, spec, library)
+    if target is None:
+        if fitted.parts:
+            raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
+                                f"stdout; the {name} program is split into "
+                                f"{len(fitted.parts)} parts, written beside it")
+        sys.stdout.write(fitted.main)
+        return []
+    write_file(target, fitted.main, f"the {name} program", encoding="ascii")
+    write_parts(target, fitted, written)
+    fresh = {name: text for name, text in library.items()
+             if target.parent / name not in written}  # once for the setups' programs
+    written.update({target.parent / name: text for name, text in fresh.items()})
+    write_library(target.parent, fresh)
+    text = f"  setup {setup}: {' '.join(features)}" if setup else ""
+    return [(target, planned, dialect.RUNTIME_VARIABLES, text)]
+
+
+def _print_compiled(spec: Any, outputs: list[tuple[Path, Any, bool, str]]) -> None:
+    """What ``compile`` says of each program it wrote."""
     from probegen.machine.calibration import UNCALIBRATED
 
     cal = spec.machine.calibration
-    for target, planned, on_control in outputs:
+    for target, planned, on_control, setup in outputs:
         print(f"wrote {target}")
+        if setup:
+            print(setup)
         if cal is not None and not on_control:
             print("  probe: the calibration is not baked in (a CMM compensates with its own "
                   "probe qualification)")
@@ -81,7 +114,6 @@ def _compile(args: argparse.Namespace) -> int:
         _print_freeform(planned, "  ")
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
-    return ExitCode.OK
 
 
 def check_part_numbers(fitted: Any, spec: Any, library: dict[str, str]) -> None:
