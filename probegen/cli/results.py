@@ -58,8 +58,8 @@ def identity_options(args: argparse.Namespace) -> IdentityOptions:
 
 def _ingest(args: argparse.Namespace) -> int:
     from probegen.evaluate.ingest import identified
-    from probegen.evaluate.setups import ingest_setups
     from probegen.evaluate.outputs import to_table, write_outputs
+    from probegen.evaluate.setups import ingest_setups
     from probegen.machine.calibration import calibration_toml, check_date, load_calibration
     from probegen.spec.model import load_spec
 

@@ -523,7 +523,7 @@ def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches
     plan, rotation = oriented.plan, oriented.orientation.rotation
     if turn is not None:
         rotation = tuple(tuple(sum(turn[k][i] * rotation[k][j] for k in range(3))  # Rᵀ·O
-                               for j in range(3)) for i in range(3))  # type: ignore[assignment]
+                               for j in range(3)) for i in range(3))
     if oriented.stylus != spec.machine.stylus:
         calibration = None
     ball = oriented.stylus.ball_radius if calibration is None else calibration

@@ -30,10 +30,10 @@ import re
 import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from probegen import ir
-from probegen.errors import ProbegenError, SpecError
+from probegen.errors import PlanningError, ProbegenError, SpecError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, NamedSetup
 from probegen.planning.orient import Orientation, frame_clearance
@@ -130,7 +130,10 @@ def table_part(part: Part | None, setup: NamedSetup | None) -> Part | None:
     return part.turned(transpose(setup.rotation))
 
 
-def in_setup(feature: Feature, setup: NamedSetup | None) -> Feature:
+F = TypeVar("F", bound=Feature)
+
+
+def in_setup(feature: F, setup: NamedSetup | None) -> F:
     """A feature as the setup's table frame sees it (``at`` turned: ``R·at``)."""
     if setup is None or not isinstance(feature, RevolvedSpec) or feature.at is None:
         return feature
@@ -274,15 +277,71 @@ def plan_setups(spec: Spec, *, runtime_variables: bool, part: Part | None,
     programs = split_setups(spec, part)
     out = []
     for sp in programs:
-        planned = plan_program(sp.spec, runtime_variables=runtime_variables,
-                               progress=progress, check_collisions=check_collisions,
-                               part=sp.part)
+        try:
+            planned = plan_program(sp.spec, runtime_variables=runtime_variables,
+                                   progress=progress, check_collisions=check_collisions,
+                                   part=sp.part)
+        except PlanningError as exc:
+            raise PlanningError(setup_hint(str(exc), spec.machine)) from exc
         if spec.machine.setups:
             program = ir.Program(planned.program.setup,
                                  (*header_comments(sp, programs), *planned.program.body))
             planned = replace(planned, program=program)
         out.append((sp, planned))
     return tuple(out)
+
+
+HINT = "add a [[setup]] to the machine profile"
+"""What a reason that asks for a setup adds: the profile key."""
+
+
+def setup_hint(reason: str, machine: MachineProfile) -> str:
+    """``reason`` (a planner's message or a left-out line) with the profile key named
+    where it asks for a setup: ``...: needs a setup: add a [[setup]] to the machine
+    profile`` (the setups it has, when it has some: none of them reaches it)."""
+    if not re.search(r"\ba setup\b", reason) or HINT in reason:
+        return reason
+    tried = ", ".join(s.name for s in machine.setups)
+    hint = HINT + (f" (none of its setups {tried} reaches it)" if tried else "")
+    detail = re.search(r" \[.*\]$", reason)
+    if detail is None:
+        return f"{reason}: {hint}"
+    return f"{reason[:detail.start()]}: {hint}{reason[detail.start():]}"
+
+
+def all_revolved_setups(part: Part, machine: MachineProfile
+                        ) -> tuple[Spec, tuple[str, ...]]:
+    """``plan --all-revolved`` with setups: the features of
+    :func:`probegen.planning.revolved_spec.all_revolved_spec` (as loaded), then for each
+    ``[[setup]]`` in order the recognised features left out as loaded that the part
+    turned so brings within reach (:func:`probegen.planning.revolved_spec.all_revolved`
+    on ``part.turned(Rᵀ)``), each with ``setup = NAME`` and the id it has as loaded; the
+    notes of the features still left out, the profile key named where they ask for a
+    setup (:func:`setup_hint`); a profile without setups: exactly
+    ``all_revolved_spec``'s."""
+    from probegen.cad.revolved import revolved_features
+    from probegen.planning.revolved_spec import all_revolved, all_revolved_spec
+
+    spec, notes = all_revolved_spec(part, machine)
+    if not machine.setups:
+        return spec, notes  # as today (the lines already say "a setup")
+    ids = {face: f"R{f.id}" for f in revolved_features(part) for face in f.faces}
+    left = {n.split(" ", 1)[0] for n in notes}
+    taken: set[str] = {f.id for f in spec.features}
+    extra: list[RevolvedSpec] = []
+    for k, s in enumerate(machine.setups, start=1):
+        check_origin(machine, k, s)
+        turned = table_part(part, s)
+        assert turned is not None
+        found, _ = all_revolved(turned, machine, setup_clearance(part, s, spec.clearance_z))
+        for f in found:
+            fid = ids.get(f.face or 0)
+            if fid is None or fid in taken or fid not in left:
+                continue
+            taken.add(fid)
+            extra.append(replace(f, id=fid, setup=s.name))
+    kept = tuple(setup_hint(n, machine) for n in notes if n.split(" ", 1)[0] not in taken)
+    return replace(spec, features=(*spec.features, *extra)), kept
 
 
 def setup_file(target: str, sp: SetupProgram, first: bool) -> str:
