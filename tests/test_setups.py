@@ -276,3 +276,56 @@ def test_small_helpers() -> None:
         "x: needs a setup: add a [[setup]] to the machine profile [detail]"  # type: ignore[arg-type]
     assert setup_hint("x: a smaller stylus", type("M", (), {"setups": ()})()) == \
         "x: a smaller stylus"  # type: ignore[arg-type]
+
+
+SIDE = '''
+[[setup]]
+name = "SIDE"
+euler_zxz = [0.0, 90.0, 0.0]
+note = "part on its side, bottom face towards +Y"
+'''
+
+
+def test_a_setup_feature_may_need_a_tilt_too(folder: Path) -> None:
+    """The part on its side (R = Rx(90 deg)): the face-down bore now faces +Y in the table
+    frame, reached by the trunnion tilted 90 deg.  Planned in that frame on the setup's
+    part turned further; a log of exact touches (frame coordinates, as the control prints
+    them under G68.2) ingests to the bore in part coordinates, the other setup's feature
+    not measured."""
+    from probegen import ir
+    from probegen.evaluate.setups import ingest_setups
+    from probegen.planning.identity import planned_touches
+
+    (folder / "five_side.toml").write_text(FIVE.read_text(encoding="utf-8") + SIDE,
+                                           encoding="utf-8")
+    (folder / "side.toml").write_text(SPEC.format(profile="five_side.toml", extra=""),
+                                      encoding="utf-8")
+    spec = load_spec(folder / "side.toml")
+    part = part_of(spec)
+    (_, _), (side, planned) = plan_setups(spec, runtime_variables=True, part=part)
+    assert side.name == "SIDE" and side.features == ("BOTTOM",)
+    (o,) = planned.oriented
+    assert not o.orientation.identity and o.orientation.rotary[0] == ("A", 90.0)
+    block_ = next(n for n, _ in frames.in_work(planned.program.body)
+                  if isinstance(n, ir.FeatureBlock))
+    assert side.to_part(block_.feature.centre) == pytest.approx((70.0, 30.0, 7.5))
+    assert frames.apply_t(side.rotation, block_.feature.axis) == pytest.approx((0, 0, -1))
+    # exact touches of the nominal bore, in the frame: 2 mm (bore radius 5 - ball 3) from
+    # its axis along each search line
+    frame_def = next(n for n in planned.program.body if isinstance(n, ir.FeatureBlock)).feature
+    centre = np.asarray(frame_def.centre)
+    lines = [f"PGSTART O{side.spec.program_number} V2 {planned.program.setup.identity}",
+             "FEAT BOTTOM 1"]
+    for t in planned_touches(planned.program, ()):
+        start, end = np.asarray(t.start), np.asarray(t.end)
+        u = (end - start) / np.linalg.norm(end - start)
+        ball = np.array([centre[0], centre[1], start[2]]) + 2.0 * u
+        lines.append(f"PT 1 {t.index} X{ball[0]:.4f} Y{ball[1]:.4f} Z{ball[2]:.4f}")
+    log = folder / "side.log"
+    log.write_text("%\n" + "\n".join([*lines, "PGEND"]) + "\n", encoding="ascii")
+    ing = ingest_setups([log], spec, part=part)
+    (bottom,) = ing.revolved
+    assert bottom.feature == "BOTTOM"
+    assert bottom.centre[:2] == pytest.approx((70.0, 30.0), abs=1e-4)
+    assert bottom.diameter == pytest.approx(10.0, abs=1e-4)
+    assert [n.feature for n in ing.not_evaluated] == ["TOP"]

@@ -117,17 +117,9 @@ class Part:
         run on the OCP shape moved by a location (no copy of the geometry), its face
         records are the original ones turned, each face's box taken again on the moved
         face (an axis-aligned box does not turn).  A turned part's own :meth:`turned`
-        turns it further: ``rotation`` is from the turned part's coordinates (a named
-        setup's part turned again into a probe frame: the original turned by
-        ``self.rotation·rotation``; the original itself when that is the identity).
+        turns the original (the rotation is always from work coordinates).
         """
         base = self.original
-        if self._turn is not None:
-            r = np.asarray(self._turn[1], dtype=np.float64) @ np.asarray(rotation,
-                                                                         dtype=np.float64)
-            if np.allclose(r, np.eye(3), rtol=0.0, atol=10.0 ** -TURN_KEY_DECIMALS):
-                return base
-            rotation = tuple(tuple(float(x) for x in row) for row in r)  # type: ignore[assignment]
         key = ("turned", tuple(round(x, TURN_KEY_DECIMALS) + 0.0
                                for row in rotation for x in row))
         return base.memo(key, lambda: Part(_turned_model(base.model, rotation),

@@ -14,10 +14,12 @@ Other kinds (sphere tests, lines, planes, free-form faces) stay in the part as l
 
 A setup's program is planned by :func:`probegen.planning.plan_program` on the part turned
 (``part.turned(Rᵀ)``: :meth:`probegen.cad.Part.turned` takes ``p_frame = Rᵀ·p_work``, so
-``Rᵀ`` of it gives ``p_table = R·p_part``), the spec's points turned with it: its work
-coordinates are the table frame.  Its program number is the spec's plus the setup's place
-in the profile (1 for the first ``[[setup]]``), its name the spec's with the setup's, and
-its header says the setup's name, rotation, origin and fixture note.  A non-zero
+``Rᵀ`` of it gives ``p_table = R·p_part``; its model made a part of its own, so that a
+feature of the setup that needs an orientation turns it further), the spec's points
+turned with it: its work coordinates are the table frame.  Its program number is the
+spec's plus the setup's place in the profile (1 for the first ``[[setup]]``), its name
+the spec's with the setup's, and its header says the setup's name, rotation, origin and
+fixture note.  A non-zero
 ``origin`` is refused (the operator sets the work offset at the part's datum again after
 turning it; an origin would shift every coordinate of the program).
 
@@ -124,10 +126,17 @@ def check_origin(machine: MachineProfile, k: int, setup: NamedSetup) -> None:
 
 
 def table_part(part: Part | None, setup: NamedSetup | None) -> Part | None:
-    """The part as it lies in ``setup`` (``part.turned(Rᵀ)``), the part itself for None."""
+    """The part as it lies in ``setup``: the model of ``part.turned(Rᵀ)`` as a part of
+    its own (kept on ``part``), so that its own :meth:`~probegen.cad.Part.turned` (an
+    orientation of a feature in the setup) turns it further, from the table frame; the
+    part itself for None."""
     if part is None or setup is None or frames.is_identity(setup.rotation):
         return part
-    return part.turned(transpose(setup.rotation))
+    from probegen.cad import Part as Whole
+
+    turned = part.turned(transpose(setup.rotation))
+    return part.original.memo(("setup", setup.name, setup.rotation),
+                              lambda: Whole(turned.model))
 
 
 F = TypeVar("F", bound=Feature)
@@ -209,6 +218,8 @@ def split_setups(spec: Spec, part: Part | None) -> tuple[SetupProgram, ...]:
     machine = spec.machine
     if not machine.setups:
         return (SetupProgram(None, 0, spec, part),)
+    for k, s in enumerate(machine.setups, start=1):
+        check_origin(machine, k, s)
     where = assign(spec, part)
     out: list[SetupProgram] = []
     for k, s in enumerate((None, *machine.setups)):
