@@ -218,8 +218,8 @@ def split_setups(spec: Spec, part: Part | None) -> tuple[SetupProgram, ...]:
     machine = spec.machine
     if not machine.setups:
         return (SetupProgram(None, 0, spec, part),)
-    for k, s in enumerate(machine.setups, start=1):
-        check_origin(machine, k, s)
+    for k, named in enumerate(machine.setups, start=1):
+        check_origin(machine, k, named)
     where = assign(spec, part)
     out: list[SetupProgram] = []
     for k, s in enumerate((None, *machine.setups)):
