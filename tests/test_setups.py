@@ -329,3 +329,23 @@ def test_a_setup_feature_may_need_a_tilt_too(folder: Path) -> None:
     assert bottom.centre[:2] == pytest.approx((70.0, 30.0), abs=1e-4)
     assert bottom.diameter == pytest.approx(10.0, abs=1e-4)
     assert [n.feature for n in ing.not_evaluated] == ["TOP"]
+
+
+def test_the_dmis_program_of_a_setup_runs_on_the_virtual_cmm(folder: Path) -> None:
+    """The same spec to DMIS: two programs; the FLIPPED one on the virtual CMM with the
+    part turned and off by OFFSET reports the bottom bore in the setup's (table) frame:
+    R·(70, 30) + OFFSET."""
+    from probegen.results import read_dmis_output
+
+    out = folder / "dmis"
+    spec = str(folder / "spec.toml")
+    assert main(["-q", "compile", spec, "-d", "dmis", "-o", f"{out}/"]) == ExitCode.OK
+    assert sorted(p.name for p in out.glob("*.dmi")) == ["spec.dmi", "spec_FLIPPED.dmi"]
+    assert "$$ TURN THE PART: PART TURNED OVER ABOUT X" in (out / "spec_FLIPPED.dmi").read_text(
+        encoding="ascii")
+    output = out / "flipped.dms"
+    assert main(["-q", "sim", str(out / "spec_FLIPPED.dmi"), "--spec", spec, "--setup",
+                 "FLIPPED", "--offset", *(str(v) for v in OFFSET), "-o", str(output)]) == 0
+    (fa,) = read_dmis_output(output).features
+    assert fa.name == "BOTTOM"
+    assert fa.position[:2] == pytest.approx((70.0 + OFFSET[0], -30.0 + OFFSET[1]), abs=1e-3)
