@@ -13,6 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO, assert_golden
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen.cli.app import main
 from probegen.errors import ExitCode, PlanningError, SpecError
@@ -349,3 +352,36 @@ def test_the_dmis_program_of_a_setup_runs_on_the_virtual_cmm(folder: Path) -> No
     (fa,) = read_dmis_output(output).features
     assert fa.name == "BOTTOM"
     assert fa.position[:2] == pytest.approx((70.0 + OFFSET[0], -30.0 + OFFSET[1]), abs=1e-3)
+
+
+@settings(max_examples=examples(60))
+@given(lines=st.lists(st.one_of(
+    st.sampled_from(["PGSTART O1001 V2 H00000000", "PGSTART O1002 V2 H00000000",
+                     "PGSTART O1003", "PGEND", "PT 1 1 X1. Y2. Z3.", "%", ""]),
+    st.text("PGSTARTO0123456789 VH\n*", max_size=30)), max_size=6),
+    count=st.integers(1, 3))
+def test_random_logs_pair_with_a_program_or_are_refused(lines: list[str], count: int) -> None:
+    """Logs of random lines: each paired with the program whose number its PGSTART prints,
+    or a ProbegenError naming the log."""
+    import tempfile
+    from types import SimpleNamespace
+
+    from probegen.errors import ProbegenError
+    from probegen.evaluate.setups import log_program, pair_logs
+
+    programs = [SimpleNamespace(spec=SimpleNamespace(program_number=1001 + k),
+                                name=f"S{k}") for k in range(2)]
+    with tempfile.TemporaryDirectory() as tmp:
+        logs = []
+        for k in range(count):
+            path = Path(tmp) / f"{k}.log"
+            path.write_text("\n".join(lines[k:]) + "\n", encoding="ascii")
+            logs.append(path)
+        try:
+            paired = pair_logs(logs, programs)  # type: ignore[arg-type]
+        except ProbegenError as exc:
+            assert any(str(log) in str(exc) for log in logs)
+            return
+        for k, log in paired.items():
+            assert log_program(log) == 1001 + k
+        assert len(set(paired.values())) == len(paired) == len(logs)
