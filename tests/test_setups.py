@@ -385,3 +385,23 @@ def test_random_logs_pair_with_a_program_or_are_refused(lines: list[str], count:
         for k, log in paired.items():
             assert log_program(log) == 1001 + k
         assert len(set(paired.values())) == len(paired) == len(logs)
+
+
+def test_a_spec_all_in_one_setup_ingests_in_part_coordinates(folder: Path,
+                                                             compiled: Path) -> None:
+    """Only the bottom bore, so the only program is the FLIPPED one (number 1002): its log
+    alone is the whole result, in part coordinates."""
+    from probegen.evaluate.setups import ingest_setups
+
+    text = SPEC.format(profile="five.toml", extra="")
+    (folder / "bottom.toml").write_text(text[:text.index('[[feature]]\nid = "TOP"')] +
+                                        text[text.index('[[feature]]\nid = "BOTTOM"'):],
+                                        encoding="utf-8")
+    spec = load_spec(folder / "bottom.toml")
+    (only,) = split_setups(spec, part_of(spec))
+    assert only.name == "FLIPPED" and only.spec.program_number == 1002
+    log = folder / "bottom_only.log"
+    assert main(["-q", "sim", str(compiled / "spec_FLIPPED.nc"), "--spec",
+                 str(folder / "bottom.toml"), "--setup", "FLIPPED", "-o", str(log)]) == 0
+    (bottom,) = ingest_setups([log], spec).revolved
+    assert bottom.centre[:2] == pytest.approx((70.0, 30.0), abs=1e-3)

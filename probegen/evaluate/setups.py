@@ -93,7 +93,7 @@ def ingest_setups(logs: Sequence[str | Path], spec: Spec, *,
         raise ProbegenError(f"ingest --run {run}: expected one log, found {len(logs)} (the "
                             "run of a log of several is chosen per log: ingest it alone)")
     paired = pair_logs(logs, programs)
-    if len(programs) == 1:
+    if len(programs) == 1 and programs[0].setup is None:
         return ingest(paired[0], spec, calibration=calibration, with_path=with_path,
                       decision_rule=decision_rule, run=run, ignore_identity=ignore_identity,
                       part=part)
