@@ -53,7 +53,7 @@ def minimal_line(path: tuple[str, ...]) -> list[str]:
     words: list[str] = []
     for action in leaf_parser(path)._actions:
         value = str(next(iter(action.choices))) if action.choices else "x"
-        if not action.option_strings and action.nargs is None:
+        if not action.option_strings and action.nargs in (None, "+"):
             words.append(value)
         elif action.option_strings and action.required:
             words += [action.option_strings[-1], value]

@@ -79,6 +79,8 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     options["head"] = profile.head  # a CMM's indexable head: SNSDEF angles on its indices
     c, s = np.cos(np.radians(args.rotate_z)), np.sin(np.radians(args.rotate_z))
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    if args.setup:
+        rotation = rotation @ _setup_rotation(args)
     if isinstance(part, tuple):
         if args.form:
             raise ProbegenError(f"sim --form {args.form}: expected a part model (--part, or "
@@ -127,6 +129,28 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
                   file=sys.stderr)
         return ExitCode.SIM_ALARM
     return ExitCode.OK
+
+
+def _setup_rotation(args: argparse.Namespace) -> Any:
+    """``sim --setup NAME``: the setup's rotation (part to table) from the profile of
+    ``--spec`` or ``--machine``.
+
+    Raises:
+        SpecError: the profile has no setup of that name, or it has an origin.
+    """
+    import numpy as np
+
+    from probegen.machine.profile import load_profile
+    from probegen.planning.setups import check_origin, setup_named
+    from probegen.spec.model import load_spec
+
+    if not (args.spec or args.machine):
+        raise ProbegenError("sim --setup: expected --spec or --machine (the profile that "
+                            "names the setup), found neither")
+    machine = load_spec(args.spec).machine if args.spec else load_profile(args.machine)
+    k, setup = setup_named(machine, args.setup)
+    check_origin(machine, k, setup)
+    return np.asarray(setup.rotation, dtype=np.float64)
 
 
 def _sim_part(args: argparse.Namespace) -> tuple[Any, Any]:
@@ -297,7 +321,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     i = sub.add_parser("ingest", help="evaluate a returned log (DPRNT) or a DMIS output "
                                       "file (free-form features) against a spec")
-    i.add_argument("log", help="the raw log as captured, or a DMIS output file (.dms, .dmi)")
+    i.add_argument("log", nargs="+",
+                   help="the raw log as captured (one per setup program of the spec, paired "
+                        "by the program number each prints), or a DMIS output file (.dms, "
+                        ".dmi)")
     i.add_argument("--spec", required=True, help="the spec the program was compiled from")
     i.add_argument("-o", "--output", default="out",
                    help="folder for results.json and results.csv (default: out/)")
@@ -354,6 +381,9 @@ def build_parser() -> argparse.ArgumentParser:
                     metavar=("DX", "DY", "DZ"), help="where the part really is, mm")
     sm.add_argument("--rotate-z", type=finite, default=0.0, metavar="DEG",
                     help="part rotation about Z, degrees")
+    sm.add_argument("--setup", metavar="NAME",
+                    help="the part lies turned as the machine profile's [[setup]] NAME says "
+                         "(a setup's program; needs --spec or --machine)")
     sm.add_argument("--form", metavar="FILE",
                     help="planted form errors of revolved faces (TOML, docs/sim.md)")
     add_probe_options(sm)

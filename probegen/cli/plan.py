@@ -20,8 +20,8 @@ if TYPE_CHECKING:
 def _compile(args: argparse.Namespace) -> int:
     from probegen.cli.progress import Bar
     from probegen.dialects import get_dialect
-    from probegen.dialects.split import fit
-    from probegen.planning import check_options, part_of, plan_program
+    from probegen.planning import check_options, part_of
+    from probegen.planning.setups import plan_setups, setup_file
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
@@ -40,35 +40,70 @@ def _compile(args: argparse.Namespace) -> int:
         if part is None:
             part = part_of(spec)  # loaded once, for every dialect
         with Bar(f"planning for {name}", unit="steps") as bar:
-            planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
-                                   progress=bar, part=part)
-        compact = args.compact or (args.compact is None and dialect.COMPACT_DEFAULT
-                                   and args.output != "-")  # stdout: self-contained
-        dialect.compact = bool(compact) and dialect.MACRO_LIBRARY  # DMIS: inline
-        if dialect.COMPACT_DEFAULT and args.compact is None and args.output == "-":
-            print(f"note: the {name} program on stdout is the inline form (every skip move "
-                  "in it); with -o FOLDER compile writes the compact form and its macro "
-                  "library", file=sys.stderr)
-        library = checked_library(dialect, spec.machine) if dialect.compact else {}
-        fitted = fit(dialect, planned.program, library)
-        check_part_numbers(fitted, spec, library)
-        if args.output == "-":
-            if fitted.parts:
-                raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
-                                    f"stdout; the {name} program is split into "
-                                    f"{len(fitted.parts)} parts, written beside it")
-            sys.stdout.write(fitted.main)
-            continue
-        target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
-        write_file(target, fitted.main, f"the {name} program", encoding="ascii")
-        write_parts(target, fitted, written)
-        write_library(target.parent, library)
-        outputs.append((target, planned, dialect.RUNTIME_VARIABLES))
+            setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
+                                 progress=bar, part=part)
+        target = None
+        if args.output == "-" and len(setups) > 1:
+            raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
+                                f"stdout; the spec's features are measured in "
+                                f"{len(setups)} setups "
+                                f"({', '.join(sp.name for sp, _ in setups)}), one program "
+                                "each")
+        if args.output != "-":
+            target = _target(args.output, Path(args.spec).stem, dialect.EXTENSION, len(names))
+        for k, (sp, planned) in enumerate(setups):
+            path = None if target is None else Path(setup_file(str(target), sp, k == 0))
+            outputs += _compile_one(args, name, dialect, sp.spec, planned, path, written,
+                                    sp.name if len(setups) > 1 else "", sp.features)
+    _print_compiled(spec, outputs)
+    return ExitCode.OK
+
+
+def _compile_one(args: argparse.Namespace, name: str, dialect: Any, spec: Any, planned: Any,
+                 target: Path | None, written: dict[Path, str], setup: str,
+                 features: tuple[str, ...]) -> list[tuple[Path, Any, bool, str]]:
+    """Write one planned program of ``compile`` (a setup's, or the only one) to ``target``
+    (None: stdout); the (file, plan, runs on the control, setup text) to print."""
+    from probegen.dialects import get_dialect
+    from probegen.dialects.split import fit
+
+    dialect = get_dialect(name)  # one instance per program: its labels start afresh
+    compact = args.compact or (args.compact is None and dialect.COMPACT_DEFAULT
+                               and args.output != "-")  # stdout: self-contained
+    dialect.compact = bool(compact) and dialect.MACRO_LIBRARY  # DMIS: inline
+    if dialect.COMPACT_DEFAULT and args.compact is None and args.output == "-":
+        print(f"note: the {name} program on stdout is the inline form (every skip move "
+              "in it); with -o FOLDER compile writes the compact form and its macro "
+              "library", file=sys.stderr)
+    library = checked_library(dialect, spec.machine) if dialect.compact else {}
+    fitted = fit(dialect, planned.program, library)
+    check_part_numbers(fitted, spec, library)
+    if target is None:
+        if fitted.parts:
+            raise ProbegenError(f"compile -o -: expected a folder or file for -o, found "
+                                f"stdout; the {name} program is split into "
+                                f"{len(fitted.parts)} parts, written beside it")
+        sys.stdout.write(fitted.main)
+        return []
+    write_file(target, fitted.main, f"the {name} program", encoding="ascii")
+    write_parts(target, fitted, written)
+    fresh = {name: text for name, text in library.items()
+             if target.parent / name not in written}  # once for the setups' programs
+    written.update({target.parent / name: text for name, text in fresh.items()})
+    write_library(target.parent, fresh)
+    text = f"  setup {setup}: {' '.join(features)}" if setup else ""
+    return [(target, planned, dialect.RUNTIME_VARIABLES, text)]
+
+
+def _print_compiled(spec: Any, outputs: list[tuple[Path, Any, bool, str]]) -> None:
+    """What ``compile`` says of each program it wrote."""
     from probegen.machine.calibration import UNCALIBRATED
 
     cal = spec.machine.calibration
-    for target, planned, on_control in outputs:
+    for target, planned, on_control, setup in outputs:
         print(f"wrote {target}")
+        if setup:
+            print(setup)
         if cal is not None and not on_control:
             print("  probe: the calibration is not baked in (a CMM compensates with its own "
                   "probe qualification)")
@@ -81,7 +116,6 @@ def _compile(args: argparse.Namespace) -> int:
         _print_freeform(planned, "  ")
         print(f"  collision check: {len(planned.clearance.segments)} segments, smallest "
               f"clearance above the margin {planned.clearance.minimum:.3f} mm")
-    return ExitCode.OK
 
 
 def check_part_numbers(fitted: Any, spec: Any, library: dict[str, str]) -> None:
@@ -214,7 +248,8 @@ def _plan(args: argparse.Namespace) -> int:
     from probegen import ir
     from probegen.dialects import get_dialect
     from probegen.planning import part_of, plan_program
-    from probegen.planning.revolved_spec import all_revolved_spec, metrics_table
+    from probegen.planning.revolved_spec import metrics_table
+    from probegen.planning.setups import all_revolved_setups
     from probegen.spec.model import load_spec
 
     if args.dialect and not args.output:
@@ -232,10 +267,12 @@ def _plan(args: argparse.Namespace) -> int:
             raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
         machine = load_profile(args.machine)
         part = load_part(args.input)
-        spec, notes = all_revolved_spec(part, machine)
+        spec, notes = all_revolved_setups(part, machine)
     else:
         spec = load_spec(args.input)
         part = part_of(spec)
+    if spec.machine.setups:
+        return _plan_setups(args, spec, part, notes)
     planned = plan_program(spec, runtime_variables=True, part=part)
     if planned.revolved or not planned.freeform:
         sys.stdout.write(metrics_table(planned.revolved, spec.machine, planned.oriented))
@@ -277,6 +314,42 @@ def _plan(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
+def _plan_setups(args: argparse.Namespace, spec: Any, part: Part | None,
+                 notes: tuple[str, ...]) -> int:
+    """``plan`` of a spec whose machine profile has setups: one table of the revolved
+    features with a setup column, then per setup program its number, features, changes
+    and collision check; the features left out; ``-o``: one program per setup."""
+    from probegen.planning.revolved_spec import metrics_table
+    from probegen.planning.setups import plan_setups
+
+    setups = plan_setups(spec, runtime_variables=True, part=part)
+    names = {o.plan.spec.id: sp.name for sp, p in setups for o in p.oriented}
+    revolved = tuple(r for _, p in setups for r in p.revolved)
+    oriented = tuple(o for _, p in setups for o in p.oriented)
+    rows = metrics_table(revolved, spec.machine, oriented).splitlines()
+    print(f"{rows[0]}  setup")
+    for r, row in zip(revolved, rows[1:-1], strict=True):
+        print(f"{row}  {names.get(r.spec.id, '-')}")
+    print(rows[-1])
+    for sp, p in setups:
+        print(f"setup {sp.name}: program O{sp.spec.program_number:04d}, features "
+              f"{' '.join(sp.features) or 'none'}; changes: {p.stylus_changes} of stylus, "
+              f"{p.orientation_changes} of orientation; collision check: "
+              f"{len(p.clearance.segments)} segments, smallest clearance above the margin "
+              f"{p.clearance.minimum:.3f} mm")
+    if args.all_revolved and not revolved:
+        print(f"no revolved feature of {args.input} can be measured safely: the list below "
+              "says why")
+    if notes:
+        print(f"left out ({len(notes)} recognised features; the reason and what would make "
+              "each measurable):")
+        for note in notes:
+            print(f"  {note}")
+    if args.output:
+        _write_programs(args, spec, part, notes)
+    return ExitCode.OK
+
+
 def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
                     left_out: tuple[str, ...]) -> None:
     """``plan -o``: the planned program in each dialect of ``-d`` (default: the spec's),
@@ -284,20 +357,25 @@ def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
     listed with their reasons in a comment block at its head."""
     from probegen import ir
     from probegen.dialects import get_dialect
-    from probegen.planning import plan_program
     from probegen.planning.left_out import header_comments
+    from probegen.planning.setups import plan_setups, setup_file
 
     names = args.dialect or [spec.dialect]
     spec.machine.check_program_number(spec.program_number, f"{args.input}: program number")
     stem = Path(args.input).stem
     for name in names:
         dialect = get_dialect(name)
-        planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
-        program = planned.program
-        program = ir.Program(program.setup, (*header_comments(left_out), *program.body))
-        target = _target(args.output, stem, dialect.EXTENSION, len(names))
-        write_file(target, dialect.generate(program), f"the {name} program", encoding="ascii")
-        print(f"wrote {target}")
+        setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
+        first = _target(args.output, stem, dialect.EXTENSION, len(names))
+        for k, (sp, planned) in enumerate(setups):
+            program = planned.program
+            program = ir.Program(program.setup, (*header_comments(left_out), *program.body))
+            target = Path(setup_file(str(first), sp, k == 0))
+            text = get_dialect(name).generate(program)  # labels start afresh per program
+            write_file(target, text, f"the {name} program",
+                       encoding="ascii")
+            print(f"wrote {target}" + (f" (setup {sp.name}: {' '.join(sp.features)})"
+                                       if len(setups) > 1 else ""))
 
 
 def _sphere_points(args: argparse.Namespace) -> int:

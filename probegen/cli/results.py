@@ -57,8 +57,9 @@ def identity_options(args: argparse.Namespace) -> IdentityOptions:
 
 
 def _ingest(args: argparse.Namespace) -> int:
-    from probegen.evaluate.ingest import identified, ingest
+    from probegen.evaluate.ingest import identified
     from probegen.evaluate.outputs import to_table, write_outputs
+    from probegen.evaluate.setups import ingest_setups
     from probegen.machine.calibration import calibration_toml, check_date, load_calibration
     from probegen.spec.model import load_spec
 
@@ -66,18 +67,24 @@ def _ingest(args: argparse.Namespace) -> int:
     cal = load_calibration(args.calibration) if args.calibration else None
     date = check_date(args.calibration_date, "--calibration-date") \
         if args.calibration_date else ""
-    if Path(args.log).suffix.lower() in DMIS_OUTPUT_SUFFIXES:
+    dmis = [log for log in args.log if Path(log).suffix.lower() in DMIS_OUTPUT_SUFFIXES]
+    if dmis:
         from probegen.evaluate.ingest import ingest_dmis
 
-        result = ingest_dmis(args.log, spec, decision_rule=args.decision_rule)
+        if len(args.log) > 1:
+            raise ProbegenError(f"ingest {' '.join(args.log)}: expected one DMIS output "
+                                f"file (the CMM evaluates each setup's features itself; "
+                                f"ingest reads the free-form features of one), found "
+                                f"{len(args.log)} files")
+        result = ingest_dmis(dmis[0], spec, decision_rule=args.decision_rule)
         if cal is not None:  # the CMM compensated its touches with its own probe data
             result = replace(result, notes=(*result.notes, "--calibration is not applied "
                                             "to a DMIS output: the CMM compensated its "
                                             "touches itself"))
     else:
-        result = ingest(args.log, spec, calibration=cal, with_path=True,
-                        decision_rule=args.decision_rule, run=args.run,
-                        ignore_identity=args.ignore_identity)
+        result = ingest_setups(args.log, spec, calibration=cal, with_path=True,
+                               decision_rule=args.decision_rule, run=args.run,
+                               ignore_identity=args.ignore_identity)
     result = identified(result, spec, identity_options(args))
     js, cs = write_outputs(result, Path(args.output))
     sys.stdout.write(to_table(result))
@@ -94,7 +101,7 @@ def _ingest(args: argparse.Namespace) -> int:
                                 f"found {'none' if not skipped else 'only NOT EVALUATED '}"
                                 f"{', '.join(skipped)}")
         refuse_incomplete_calibration(result)
-        written = result.results[0].calibration(str(args.log), date)
+        written = result.results[0].calibration(str(args.log[0]), date)
         target = write_file(args.write_calibration, calibration_toml(written),
                             "the probe calibration")
         print(f"wrote the probe calibration {target} ({written.fingerprint}"
@@ -194,7 +201,8 @@ def _qif(args: argparse.Namespace) -> int:
         export = dmis_output_to_qif(out, tolerances=limits)
         text, notes = export.text, export.notes
     else:
-        from probegen.evaluate.ingest import identified, ingest
+        from probegen.evaluate.ingest import identified
+        from probegen.evaluate.setups import ingest_setups
         from probegen.machine.calibration import load_calibration
         from probegen.spec.model import load_spec
 
@@ -202,8 +210,9 @@ def _qif(args: argparse.Namespace) -> int:
             raise ProbegenError(f"qif {args.input}: a DPRNT log needs --spec, found none")
         spec = load_spec(args.spec)
         cal = load_calibration(args.calibration) if args.calibration else None
-        ingested = ingest(args.input, spec, calibration=cal, decision_rule=args.decision_rule,
-                          run=args.run, ignore_identity=args.ignore_identity)
+        ingested = ingest_setups([args.input], spec, calibration=cal,
+                                 decision_rule=args.decision_rule, run=args.run,
+                                 ignore_identity=args.ignore_identity)
         ingested = identified(ingested, spec, identity_options(args))
         text, notes = ingested_to_qif(ingested, spec=spec), ingested.notes
         print(f"probe: {ingested.calibration_text}")

@@ -236,7 +236,8 @@ class _Gaps:
 def ingest(log_path: str | Path, spec: Spec, *,
            calibration: ProbeCalibration | None = None, with_path: bool = False,
            decision_rule: str | None = None, run: int | None = None,
-           ignore_identity: bool = False, part: Part | None = None) -> Ingested:
+           ignore_identity: bool = False, part: Part | None = None,
+           turn: frames.Rotation | None = None) -> Ingested:
     """Read a DPRNT log and evaluate every feature of ``spec``: completely, or as
     ``NOT EVALUATED`` with the reason.
 
@@ -247,7 +248,11 @@ def ingest(log_path: str | Path, spec: Spec, *,
     again to record the nominal stylus path for the report.  ``decision_rule``
     overrides the spec's ``[evaluation] decision_rule``.  ``calibration`` defaults to
     the spec's ``[machine] calibration``.  ``part`` is the spec's model, loaded
-    (:func:`probegen.planning.part_of`); loaded here when not given.
+    (:func:`probegen.planning.part_of`); loaded here when not given.  ``turn``: a named
+    setup's program (``spec`` and ``part`` the setup's, in the table frame,
+    :mod:`probegen.evaluate.setups`): the setup's rotation ``R`` (``p_table =
+    R·p_part``); the revolved features' touches and nominals are turned back to part
+    coordinates before the fits.
 
     Raises:
         ProbegenError: the log cannot be read, belongs to another program, names points
@@ -288,7 +293,7 @@ def ingest(log_path: str | Path, spec: Spec, *,
     for feature in spec.features:
         if isinstance(feature, RevolvedSpec):
             outcomes.append(_revolved(feature, spec, oriented[feature.id], touches, notes,
-                                      gaps, budget, calibration))
+                                      gaps, budget, calibration, turn))
         elif isinstance(feature, FreeformSpec):
             outcomes.append(ingest_freeform(feature, spec, part, touches, notes, calibration,
                                             gaps))
@@ -502,7 +507,8 @@ def ingest_dmis_freeform(output: DmisOutput, spec: Spec, part: Part | None = Non
 
 def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches,
               notes: list[str], gaps: _Gaps, budget: Budget,
-              calibration: ProbeCalibration | None = None) -> Outcome:
+              calibration: ProbeCalibration | None = None,
+              turn: frames.Rotation | None = None) -> Outcome:
     """Evaluate a revolved feature from its touches (NOT EVALUATED: a touch missing or
     without contact, too few to fit, or a failed fit).
 
@@ -511,9 +517,13 @@ def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches
     plan there and the control printed its touches there (#5061-#5063 under G68.2), so
     the nominal and the touches are turned back to work coordinates with the frame's
     rotation (:mod:`probegen.ir.frames`); the ball is that of the feature's stylus (the
-    calibration's radius only for the ``[probe]`` stylus).
+    calibration's radius only for the ``[probe]`` stylus).  ``turn``: a named setup's
+    rotation ``R``; the frame's rotation is then ``Rᵀ·O`` (frame → table → part).
     """
     plan, rotation = oriented.plan, oriented.orientation.rotation
+    if turn is not None:
+        rotation = tuple(tuple(sum(turn[k][i] * rotation[k][j] for k in range(3))  # Rᵀ·O
+                               for j in range(3)) for i in range(3))
     if oriented.stylus != spec.machine.stylus:
         calibration = None
     ball = oriented.stylus.ball_radius if calibration is None else calibration

@@ -45,6 +45,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     retract = 2.0                  # optional; the M2 safe distance
     stylus = "D2"                  # optional: the rack's stylus to use (default: the
                                    # largest that plans it; also on lines, planes, freeform)
+    setup = "FLIPPED"              # optional: the profile's [[setup]] to measure it in
+                                   # (default: as loaded, else the first that reaches it)
     tolerance = { diameter = [0.0, 0.025], position = 0.05, form = 0.01 }
     # position: the zone diameter; form_method = "least_squares" in the tolerance
     # table overrides [evaluation] for this feature
@@ -219,6 +221,9 @@ class RevolvedSpec:
         actions: run-time decisions (``spec_actions``; circles and cylinders).
         stylus: the label of the rack's stylus the spec forces (``stylus = "D2"``), or
             None: the planner picks (``planning.styli``).
+        setup: the name of the machine profile's ``[[setup]]`` the spec forces
+            (``setup = "FLIPPED"``), or None: the first setup that reaches the feature
+            (``planning.setups``).
     """
 
     id: str
@@ -232,6 +237,7 @@ class RevolvedSpec:
     tolerance: RevolvedTolerance = RevolvedTolerance()
     actions: Actions = Actions()
     stylus: str | None = None
+    setup: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -440,6 +446,8 @@ def _feature(t: Table, k: float, form_method: str = "minimum_zone",
         feature = _revolved(t, fid, kind, k, form_method)
     if not isinstance(feature, SphereTest):
         feature = dataclasses.replace(feature, stylus=_stylus(t, machine))
+    if isinstance(feature, RevolvedSpec):
+        feature = dataclasses.replace(feature, setup=_setup(t, machine))
     t.done()
     return feature
 
@@ -456,6 +464,21 @@ def _stylus(t: Table, machine: MachineProfile | None) -> str | None:
                         f"({', '.join(labels)}; {machine.source}: [[probe.stylus]]), found "
                         f"{label!r}{did_you_mean(label, labels)}")
     return label
+
+
+def _setup(t: Table, machine: MachineProfile | None) -> str | None:
+    """``setup = "FLIPPED"``: the name of one of the machine profile's ``[[setup]]``
+    (checked when the machine is known), or None."""
+    name = t.get_str("setup")
+    if name is None or machine is None:
+        return name
+    names = [s.name for s in machine.setups]
+    if name not in names:
+        known = ", ".join(names) if names else "none"
+        raise SpecError(f"{t.where('setup')}: expected a setup of the machine profile "
+                        f"({known}; {machine.source}: [[setup]]), found "
+                        f"{name!r}{did_you_mean(name, names)}")
+    return name
 
 
 def _scaled(v: tuple[float, ...] | None, k: float) -> Vec3 | None:
