@@ -27,6 +27,7 @@ from probegen.planning.orient import (
     changes,
     head_angles,
     head_direction,
+    needs_index,
     order_groups,
     orient_name,
     orientation_for,
@@ -240,30 +241,82 @@ def test_touches_lie_on_the_model_with_the_outward_normal(
     assert tilted == 8 * 2 * 3
 
 
-def test_the_collision_check_passes_and_refuses_a_wrong_orientation_change(
+def _work(node: ir.Node, frame: ir.Orient | None) -> np.ndarray:
+    assert isinstance(node, ir.Move) and node.mode is ir.MoveMode.RAPID, node
+    return np.array(frames.to_work(frame, node.target))  # type: ignore[arg-type]
+
+
+def test_every_change_is_routed_at_the_index_height_in_the_program(
+        planned: tuple[str, PlannedProgram], loaded: cad.Part) -> None:
+    """Before each change taken at the index height (every Orient; a stylus change on the
+    CMM) the program goes straight up in work Z to it; after it, level at that height
+    over the next move's point, which then goes down: the moves are in the program (in
+    the old frame's and the new frame's coordinates) and the check cleared them."""
+    kind, p = planned
+    machine = profile(kind)
+    body = list(p.program.body)
+    top = loaded.bbox_max[2]
+    frame: ir.Orient | None = None
+    seen: list[np.ndarray] = []
+    routes = 0
+    k = 0
+    while k < len(body):
+        node = body[k]
+        if not needs_index(node, machine):
+            for n in ir.walk((node,)):
+                if isinstance(n, ir.Move) and n.mode is not ir.MoveMode.RETRACT:
+                    seen.append(np.array(frames.to_work(frame, n.target)))  # type: ignore[arg-type]
+            k += 1
+            continue
+        end = k
+        while end < len(body) and isinstance(body[end], ir.Orient | ir.SelectStylus):
+            end += 1
+        up = _work(body[k - 1], frame)
+        for n in body[k:end]:
+            frame = n if isinstance(n, ir.Orient) else frame
+        longest = max(s.length + s.ball_radius for s in RACK)
+        assert np.allclose(seen[-1], up) and len(seen) >= 2  # the move up, then the one before
+        assert up[:2] == pytest.approx(seen[-2][:2], abs=1e-9) and up[2] > seen[-2][2]
+        assert top + 10.0 < up[2] <= top + longest + (60.0 if kind == "head" else 0.0) + 0.1 + 1e-6
+        if end < len(body):
+            over, down = _work(body[end], frame), _work(body[end + 1], frame)
+            assert over[2] == pytest.approx(up[2], abs=1e-9)
+            assert over[:2] == pytest.approx(down[:2], abs=1e-9) and down[2] < over[2]
+        routes += 1
+        k = end
+    changes = sum(needs_index(n, machine) for n in body)
+    assert routes == p.orientation_changes if kind == "tilt" else routes <= changes
+    kinds = [s.kind for s in p.clearance.segments]
+    assert "rapid" in kinds and any(k.startswith("stylus change to") for k in kinds)
+
+
+def test_the_check_refuses_a_change_below_the_index_height_and_a_dive_after_it(
         planned: tuple[str, PlannedProgram], loaded: cad.Part) -> None:
     kind, p = planned
     machine = profile(kind)
-    assert p.clearance.segments
-    kinds = {s.kind for s in p.clearance.segments}
-    assert any(k.startswith("up to the index point of") for k in kinds)
-    assert any(k.startswith("stylus change to") for k in kinds)
     body = list(p.program.body)
+    obstacle = obstacle_for(loaded, [])
     k = next(i for i, n in enumerate(body) if isinstance(n, ir.Orient))
-    before = [n for n in body[:k] if isinstance(n, ir.Move)]
-    low = (0.0, 0.0, 45.0)  # above the part (40) but below the clearance level (60)
-    wrong = ir.Program(p.program.setup, (*body[:k], ir.Move(low, ir.MoveMode.RAPID),
-                                         *body[k:]))
-    assert before
-    with pytest.raises(CollisionError, match="expected the old frame's clearance level"):
-        check_program(wrong, obstacle_for(loaded, []), [], machine, part=loaded)
-    # an orientation whose first move goes below its own clearance level
-    orient = body[k]
-    assert isinstance(orient, ir.Orient)
-    shallow = replace(orient, clearance_z=orient.clearance_z + 5.0)
-    with pytest.raises(PlanningError, match="expected its clearance level"):
-        check_program(ir.Program(p.program.setup, (*body[:k], shallow, *body[k + 1:])),
-                      obstacle_for(loaded, []), [], machine, part=loaded)
+    start = k - 1 if isinstance(body[k - 1], ir.SelectStylus) else k
+    up = body[start - 1]
+    assert isinstance(up, ir.Move)
+    # the probe left at the old clearance level (60: above the part, below the index height)
+    low = ir.Move((*up.target[:2], 60.0), ir.MoveMode.RAPID)
+    name = body[start].name if isinstance(body[start], ir.Orient) else body[start].label
+    with pytest.raises(CollisionError, match=rf"change to {name}: the probe stands at work "
+                                             rf"z = 60\.000, expected the index height "):
+        check_program(ir.Program(p.program.setup, (*body[:start - 1], low, *body[start:])),
+                      obstacle, [], machine, part=loaded)
+    # no move before the change: the probe's position is unknown
+    with pytest.raises(CollisionError, match="stands at an unknown position"):
+        check_program(ir.Program(p.program.setup, tuple(body[start:])), obstacle, [],
+                      machine, part=loaded)
+    # the over point left out: the first move after the Orient dives from the index height
+    with pytest.raises(PlanningError, match=rf"change to {body[k].name}: the first move "  # type: ignore[union-attr]
+                                            r"after it goes to work z = .*expected the "
+                                            r"index height .*\(the over point\)"):
+        check_program(ir.Program(p.program.setup, (*body[:k + 1], *body[k + 2:])),
+                      obstacle, [], machine, part=loaded)
 
 
 def test_a_face_down_bore_is_left_out_for_a_reason(model: Path, loaded: cad.Part) -> None:

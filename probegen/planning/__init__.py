@@ -27,7 +27,13 @@ from probegen.planning.collision import ClearanceReport, Obstacle, check_program
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.identity import program_identity
 from probegen.planning.order import Stop, Tour, order_stops
-from probegen.planning.oriented import OrientedPlan, grouped_nodes, plan_oriented
+from probegen.planning.orient import needs_index
+from probegen.planning.oriented import (
+    OrientedPlan,
+    grouped_nodes,
+    plan_oriented,
+    with_index_moves,
+)
 from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import Comparison
@@ -164,6 +170,8 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         freeform = [freeform[k] for k in order]
         body += [n for f in freeform for n in f.nodes]
     body += final_actions(checked, setup.work_offset, spheres)
+    if part is not None and any(needs_index(n, machine) for n in body):
+        body = list(with_index_moves(body, part, machine, machine.stylus))
     program = ir.Program(setup, tuple(body))
     program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
     report = (check_program(program, obstacle, plans, machine, progress=progress, part=part)

@@ -41,7 +41,7 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
-from probegen.planning.orient import LEVEL_SLACK, index_point, over_point, to_frame, to_work
+from probegen.planning.orient import LEVEL_SLACK, index_height, needs_index, to_frame, to_work
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -333,9 +333,13 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     offset (revolved features) need none.
 
     After an ``ir.Orient`` the nodes are checked in its frame against ``part`` turned
-    (``part`` is needed then), and the orientation change itself as moves
-    (:func:`orientation_change`); after an ``ir.SelectStylus`` with that stylus, the
-    change checked where it is taken (:func:`stylus_change`).
+    (``part`` is needed then); after an ``ir.SelectStylus`` with that stylus.  A change
+    taken at the index height (:func:`probegen.planning.orient.needs_index`: every
+    ``Orient``, a stylus change on a CMM with a head) requires the probe to stand at or
+    above :func:`probegen.planning.orient.index_height` (``CollisionError``), and the
+    first move after it to stay there (:func:`_first_after`, ``PlanningError``): the
+    route is the program's own moves, checked as every move is; nothing is assumed.
+    Any other stylus change is taken at the clearance level or above.
     """
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -352,7 +356,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     inside = getattr(obstacle, "inside", None)
     outside: set[tuple[float, float, float]] = set()
     frame: ir.Orient | None = None
-    entering = False
+    entering: ir.Orient | ir.SelectStylus | None = None
 
     def check(a: np.ndarray, b: np.ndarray, ea: float, eb: float, kind: str,
               touch: bool = False) -> None:
@@ -374,27 +378,36 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     for node in ir.walk(program.body):
         if progress is not None:
             progress(1)
-        if isinstance(node, ir.Orient):
+        if isinstance(node, ir.Orient | ir.SelectStylus) and needs_index(node, machine):
             if part is None:
-                raise PlanningError(f"orientation {node.name}: the check of a turned probe "
-                                    "needs the part model, found none")
-            level = setup.clearance_z if frame is None else frame.clearance_z
-            new = obstacle_for(part.turned(node.rotation), [])
-            if pos is not None:
-                index = index_point(part, frame, pos, level, node, stylus, machine)
-                check(pos, to_frame(frame, index), 0.0, 0.0,
-                      f"up to the index point of {node.name}")
-                obstacle, inside, outside = new, getattr(new, "inside", None), set()
-                pos = to_frame(node, index)
-                entering = True
-            obstacle, inside, frame = new, getattr(new, "inside", None), node
+                raise PlanningError(f"{_change(node)}: the check of a change taken at the "
+                                    "index height needs the part model, found none")
+            before = stylus
+            if isinstance(node, ir.SelectStylus):
+                stylus = _stylus_of(node)
+            height = max(index_height(part, s.length, s.ball, machine)
+                         for s in (before, stylus))
+            here = None if pos is None else to_work(frame, pos)
+            if here is None or here[2] < height - LEVEL_SLACK:
+                found = "an unknown position" if here is None else f"work z = {here[2]:.3f}"
+                raise CollisionError(f"{_change(node)}: the probe stands at {found}, expected "
+                                     f"the index height {height:.3f} or above")
+            if isinstance(node, ir.Orient):
+                obstacle = obstacle_for(part.turned(node.rotation), [])
+                inside, outside, frame = getattr(obstacle, "inside", None), set(), node
+                pos = to_frame(frame, here)
+            else:
+                assert pos is not None
+                check(pos, pos, 0.0, 0.0, f"stylus change to {node.label}")
+            entering = node
+            r = stylus.ball
         elif isinstance(node, ir.SelectStylus):
             level = setup.clearance_z if frame is None else frame.clearance_z
             if pos is not None and pos[2] < level - LEVEL_SLACK:
                 raise CollisionError(f"stylus change to {node.label}: the probe is at "
                                      f"z = {pos[2]:.3f}, expected the clearance level "
                                      f"{level:.3f} or above")
-            stylus = Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
+            stylus = _stylus_of(node)
             r = stylus.ball
             if pos is not None:
                 check(pos, pos, 0.0, 0.0, f"stylus change to {node.label}")
@@ -408,17 +421,13 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 if touch_start is None or not np.allclose(target, touch_start, atol=1e-9):
                     raise PlanningError(f"feature {feature}: a retract must return to the "
                                         f"start of its touch, found {fmt(target)}")
-            elif pos is not None and entering and frame is not None:
-                if target[2] < frame.clearance_z - LEVEL_SLACK:
-                    raise PlanningError(f"orientation {frame.name}: the first move after it "
-                                        f"goes to frame z = {target[2]:.3f}, expected its "
-                                        f"clearance level {frame.clearance_z:.3f}")
-                over = to_frame(frame, over_point(to_work(frame, pos), to_work(frame, target)))
-                check(pos, over, 0.0, 0.0, f"from the index point of {frame.name}")
-                check(over, target, 0.0, extra, node.mode.value)
-            elif pos is not None:
-                check(pos, target, pos_extra, extra, node.mode.value)
-            entering = False
+            else:
+                if entering is not None:
+                    assert part is not None
+                    _first_after(entering, frame, target, part, stylus, machine, clear)
+                if pos is not None:
+                    check(pos, target, pos_extra, extra, node.mode.value)
+            entering = None
             pos, pos_extra, touch_start = target, extra, None
         elif isinstance(node, ir.Touch):
             feature = node.feature
@@ -436,6 +445,52 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                     w.values[name] = float((contact + r * n - w.origin())[axis])
             touch_start = start
     return ClearanceReport(tuple(out))
+
+
+def _change(node: ir.Orient | ir.SelectStylus) -> str:
+    """``orientation change to A90B90`` or ``stylus change to D2``."""
+    if isinstance(node, ir.Orient):
+        return f"orientation change to {node.name}"
+    return f"stylus change to {node.label}"
+
+
+def _stylus_of(node: ir.SelectStylus) -> Stylus:
+    """The stylus a ``SelectStylus`` takes, as the check sees it."""
+    return Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
+
+
+def _first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
+                 target: np.ndarray, part: Part, stylus: Stylus, machine: MachineProfile,
+                 clear: float) -> None:
+    """The first move after a change taken at the index height goes to a point at that
+    height (the over point: the probe moves level at the index height, then down).
+
+    After a five-axis ``Orient`` (rotary axes, no head: the table turns under the
+    spindle, and the dialect's length-offset block brings the probe down the new tool
+    axis to the frame's clearance level at whatever point of the frame the turn left it
+    over, ``G0 G43 H Z``) the over point and that level must also lie above the turned
+    part's top by the ball and half the margin, so that any move between them is clear.
+
+    Raises:
+        PlanningError: the move goes below the index height.
+        CollisionError: the five-axis levels are too low.
+    """
+    height = index_height(part, stylus.length, stylus.ball, machine)
+    work = to_work(frame, target)
+    if work[2] < height - LEVEL_SLACK:
+        raise PlanningError(f"{_change(change)}: the first move after it goes to work "
+                            f"z = {work[2]:.3f}, expected the index height {height:.3f} "
+                            "(the over point)")
+    if not isinstance(change, ir.Orient) or change.head is not None or not change.rotary:
+        return
+    floor = part.turned(change.rotation).bbox_max[2] + stylus.ball + clear
+    for what, z in (("its clearance level", change.clearance_z),
+                    ("the over point", float(target[2]))):
+        if z < floor - LEVEL_SLACK:
+            raise CollisionError(f"{_change(change)}: {what} is at frame z = {z:.3f}, "
+                                 f"expected {floor:.3f} or above (the turned part's top "
+                                 "plus the ball and half the margin): the probe comes down "
+                                 "the tool axis there after the table turns")
 
 
 SLANT_FACTOR = 0.9

@@ -30,12 +30,12 @@ import itertools
 import math
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from probegen import ir
-from probegen.errors import CollisionError, PlanningError, ProbegenError
+from probegen.errors import PlanningError, ProbegenError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
 
@@ -253,36 +253,41 @@ def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
     return np.asarray(frames.to_work(frame, (float(p[0]), float(p[1]), float(p[2]))))
 
 
-def index_height(part: Part, stylus: Any, machine: MachineProfile) -> float:
-    """The work Z where the probe changes orientation, mm: the part's top plus the whole
-    stylus (length and ball), the head's body on a CMM and the margin, so that the
-    stylus clears the part's bounding box in every direction it turns to.  ``stylus``:
-    the collision check's (``ball`` radius and ``length``, mm)."""
+def index_height(part: Part, length: float, ball: float, machine: MachineProfile) -> float:
+    """The work Z where the probe changes orientation (or, on a CMM with a head, takes
+    another stylus), mm: the part's top plus the whole stylus (``length`` and ``ball``
+    radius, mm), the head's body on a CMM and the margin, so that the stylus clears the
+    part's bounding box in every direction it turns to."""
     body = machine.head.body_length if machine.head is not None else 0.0
-    return part.bbox_max[2] + stylus.length + stylus.ball + body + machine.margin
+    return part.bbox_max[2] + length + ball + body + machine.margin
 
 
-def index_point(part: Part, frame: ir.Orient | None, pos: np.ndarray, level: float,
-                node: ir.Orient, stylus: Any, machine: MachineProfile) -> np.ndarray:
-    """Where orientation change ``node`` is taken (work coordinates): straight up (work
-    +Z) from ``pos`` (the old ``frame``'s coordinates) to :func:`index_height`.
-
-    Raises:
-        CollisionError: ``pos`` is below the old frame's clearance ``level``.
-    """
-    if pos[2] < level - LEVEL_SLACK:
-        raise CollisionError(f"orientation change to {node.name}: the probe is at frame "
-                             f"z = {pos[2]:.3f}, expected the old frame's clearance level "
-                             f"{level:.3f} or above")
-    here = to_work(frame, pos)
-    return np.array([here[0], here[1], max(here[2], index_height(part, stylus, machine))])
+def needs_index(node: ir.Node, machine: MachineProfile) -> bool:
+    """Whether change ``node`` is taken at the index height: every ``Orient``, and a
+    ``SelectStylus`` on a CMM with a head (the CMM leaves for its rack and comes back
+    with another stylus turned as the head stands: clear of the part's bounding box
+    only at the index height).  A machine tool's stylus change retracts along the tool
+    axis and comes back to the same point at the clearance level (the dialect's
+    ``G53 Z0`` ... ``G43 H Z``)."""
+    return isinstance(node, ir.Orient) or (isinstance(node, ir.SelectStylus)
+                                           and machine.head is not None)
 
 
-def over_point(index: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """The point at the index height over ``target`` (both work coordinates): the new
-    orientation goes there level, then to its first point."""
-    return np.array([target[0], target[1], max(index[2], target[2])])
-
+def over_point(target: np.ndarray, height: float, rotation: frames.Rotation) -> np.ndarray:
+    """Where the probe goes at the index height after a change, work coordinates: over
+    ``target`` (the first point after the change, work coordinates) at work Z
+    ``height``; when the new tool axis ``a`` (``rotation``'s frame Z) points below the
+    horizontal, pushed out along ``a`` too, so that the point is as high in the frame as
+    ``target`` (``target + u·ẑ + v·a`` with ``v = -u·a_z``, ``u = (height - z) / (1 -
+    a_z²)``): the probe comes down to the over point from above the frame's clearance
+    level whether it stands at the index point (a CMM head) or where the table's turn
+    left it (a five-axis trunnion)."""
+    a = np.array([rotation[0][2], rotation[1][2], rotation[2][2]])
+    rise = max(height - float(target[2]), 0.0)
+    if a[2] >= 0.0:
+        return np.array([target[0], target[1], target[2] + rise])
+    u = rise / (1.0 - a[2] * a[2])
+    return np.asarray(target + u * np.array([0.0, 0.0, 1.0]) - u * a[2] * a)
 
 
 Group = tuple[str, Hashable]
