@@ -72,7 +72,17 @@ def bore(fid: str, centre: tuple[float, float], levels: tuple[float, ...], diame
 
 TOP = bore("TOP", (20.0, 10.0), (40.0,), 20.0, 6.0, 50.0)
 SIDE_BORE = bore("SIDE", (0.0, 10.0), (48.0, 42.0), 8.0, 2.0, 80.0)
-BODY: tuple[ir.Node, ...] = (*TOP, D2, SIDE, *SIDE_BORE, VERTICAL)
+INDEX_Z = 120.0
+"""The index height of the hand-made program (work Z): the changes are routed there."""
+UP = ir.Move((20.0, 10.0, INDEX_Z), ir.MoveMode.RAPID)
+"""Straight up from the end of TOP (work = the vertical frame)."""
+OVER = ir.Move((0.0, INDEX_Z, 80.0), ir.MoveMode.RAPID)
+"""Over SIDE's first point (frame (0, 10, 80) = work (80, 0, 10)) at the index height:
+work (80, 0, 120), written in SIDE's frame."""
+BODY: tuple[ir.Node, ...] = (*TOP, UP, D2, SIDE, OVER, *SIDE_BORE, OVER, VERTICAL)
+"""The program as the planner routes it: up to the index height, the changes, level over
+the next point; at the end straight up (work (80, 0, 120) again) and back to the
+vertical."""
 
 
 def program(*nodes: ir.Node, setup: ir.Setup = SETUP) -> ir.Program:
