@@ -504,3 +504,41 @@ def test_a_work_offset_update_from_a_turned_feature_is_refused(model: Path,
     with pytest.raises(PlanningError, match=r"found a feature measured in a turned frame "
                                             r"\(A90BM90\)"):
         plan_program(replace(spec, features=(feature,)), runtime_variables=True, part=loaded)
+
+
+@pytest.mark.parametrize(("profile_path", "dialect", "suffix"), [
+    ("samples/machines/cmm.toml", "dmis", "dmi"),
+    ("samples/machines/vmc-5axis-fanuc.toml", "fanuc", "nc")])
+def test_all_revolved_runs_on_the_virtual_machine_with_its_route(
+        model: Path, loaded: cad.Part, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        profile_path: str, dialect: str, suffix: str) -> None:
+    """``--all-revolved`` on the block with the CMM sample (DMIS) and the five-axis sample
+    (Fanuc): the program, routed at the index height around each change, runs on the
+    virtual CMM / machine (``probegen sim``) without an alarm, every planned touch made."""
+    from probegen.cli.app import main
+    from probegen.dialects import get_dialect
+    from probegen.planning.revolved_spec import all_revolved_spec
+
+    machine = load_profile(REPO / profile_path)
+    spec, _ = all_revolved_spec(loaded, machine)
+    p = plan_program(spec, runtime_variables=dialect != "dmis", part=loaded)
+    assert p.orientation_changes == 4
+    d = get_dialect(dialect)
+    d.compact = False
+    text = d.generate(p.program)
+    lines = text.split("\n")
+    if dialect == "dmis":
+        # each head index: GOTO up, SNSLCT (after the stylus's, if any), GOTO level over
+        for k, line in enumerate(lines):
+            if line.startswith("$$ ORIENT"):
+                before = next(x for x in reversed(lines[:k]) if x.startswith("GOTO/"))
+                after = lines[k + 2]
+                assert after.startswith("GOTO/") and after.split(",")[-1] == \
+                    before.split(",")[-1], (before, after)
+    program, log = tmp_path / f"prog.{suffix}", tmp_path / "out.log"
+    program.write_text(text, encoding="ascii")
+    assert main(["sim", str(program), "--part", str(model), "--machine",
+                 str(REPO / profile_path), "-o", str(log)]) == 0
+    touches = sum(isinstance(n, ir.Touch) for n in ir.walk(p.program.body))
+    assert touches == len(spec.features) * 16
+    assert f"({touches} touches)" in capsys.readouterr().err
