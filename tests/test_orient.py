@@ -542,3 +542,46 @@ def test_all_revolved_runs_on_the_virtual_machine_with_its_route(
     touches = sum(isinstance(n, ir.Touch) for n in ir.walk(p.program.body))
     assert touches == len(spec.features) * 16
     assert f"({touches} touches)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("axis", [(1.0, 0.0, 0.0), (0.6, 0.0, 0.8), (0.0, 0.94, -0.34),
+                                  (0.0, 0.0, 1.0)])
+def test_the_over_point_is_at_the_index_height_and_not_lower_in_the_frame(
+        axis: tuple[float, float, float]) -> None:
+    """Over a point at the index height; a tool axis below the horizontal (a tilt of
+    110 deg) pushes it out along the axis so that it is as high in the frame."""
+    from probegen.planning.orient import over_point
+
+    a = np.array(axis) / np.linalg.norm(axis)
+    rotation = frames.frame_for(tuple(a))  # type: ignore[arg-type]
+    target = np.array([12.0, -7.0, 20.0])
+    over = over_point(target, 150.0, rotation)
+    assert over[2] == pytest.approx(150.0, abs=1e-9)
+    rise = float(np.dot(over - target, a))
+    assert rise >= -1e-9 if a[2] < 0.0 else rise == pytest.approx(130.0 * a[2], abs=1e-9)
+    if a[2] >= 0.0:
+        assert over[:2] == pytest.approx(target[:2], abs=1e-12)
+    else:
+        assert rise == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_five_axis_change_needs_its_levels_above_the_turned_part(
+        planned: tuple[str, PlannedProgram], loaded: cad.Part) -> None:
+    """After G53.1 the control brings the probe down the tool axis to the frame's
+    clearance level wherever the table's turn left it: the check refuses a frame whose
+    clearance level leaves less than the ball and half the margin above the turned part."""
+    kind, p = planned
+    body = list(p.program.body)
+    k = next(i for i, n in enumerate(body) if isinstance(n, ir.Orient))
+    orient = body[k]
+    assert isinstance(orient, ir.Orient)
+    top = loaded.turned(orient.rotation).bbox_max[2]
+    low = replace(orient, clearance_z=top + 1.0)
+    if kind == "head":  # the head turns the stylus where it stands: the level is not used
+        check_program(ir.Program(p.program.setup, (*body[:k], low, *body[k + 1:])),
+                      obstacle_for(loaded, []), [], profile(kind), part=loaded)
+        return
+    with pytest.raises(CollisionError, match=rf"change to {orient.name}: its clearance level "
+                                             rf"is at frame z = {top + 1.0:.3f}, expected "):
+        check_program(ir.Program(p.program.setup, (*body[:k], low, *body[k + 1:])),
+                      obstacle_for(loaded, []), [], profile(kind), part=loaded)

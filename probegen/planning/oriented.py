@@ -270,11 +270,14 @@ def with_index_moves(body: Sequence[ir.Node], part: Part, machine: MachineProfil
     the one before it), in the old frame's coordinates; the changes; a rapid to the over
     point (:func:`probegen.planning.orient.over_point` of the next move's target), in the
     new frame's coordinates; then the body's own next move down.  On a machine tool a
-    stylus change of the run stays at the old frame's clearance level, before the move
-    up (the dialect's tool change comes back to where it left).  When the last position
-    is not known exactly (a run-time coordinate), the move up goes to the index height
-    over the next target instead; with no next move (the end of the program) there is no
-    over point.  ``start``: the stylus at the program's start.
+    stylus change is no change taken at the index height: it stays at the old frame's
+    clearance level, before the move up (the dialect's tool change comes back to where
+    it left).  The probe already at or above the index height does not move up; the
+    next move at or above it needs no over point.  When the last position is not known
+    exactly (a run-time coordinate, a local frame, the program's start), the move up
+    goes to the index height over the next target instead; with no next move (the end
+    of the program) there is no over point.  ``start``: the stylus at the program's
+    start.
 
     Raises:
         PlanningError: neither the position before a change nor the move after it is
@@ -346,7 +349,8 @@ def _route(run: Sequence[ir.Node], here: np.ndarray | None, frame: ir.Orient | N
     else:
         assert over is not None
         up = over
-    out: list[ir.Node] = [_rapid(to_frame(frame, up)), *run]
+    moved = here is None or not np.allclose(up, here, atol=1e-9)
+    out: list[ir.Node] = [*([_rapid(to_frame(frame, up))] if moved else []), *run]
     if over is not None and target is not None and not np.allclose(over, target, atol=1e-9):
         out.append(_rapid(to_frame(new, over)))
     return out
