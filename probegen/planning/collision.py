@@ -41,7 +41,15 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
-from probegen.planning.orient import LEVEL_SLACK, index_height, needs_index, to_frame, to_work
+from probegen.planning.orient import (
+    LEVEL_SLACK,
+    change_name,
+    first_after,
+    index_height,
+    needs_index,
+    to_frame,
+    to_work,
+)
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -337,9 +345,10 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     taken at the index height (:func:`probegen.planning.orient.needs_index`: every
     ``Orient``, a stylus change on a CMM with a head) requires the probe to stand at or
     above :func:`probegen.planning.orient.index_height` (``CollisionError``), and the
-    first move after it to stay there (:func:`_first_after`, ``PlanningError``): the
-    route is the program's own moves, checked as every move is; nothing is assumed.
-    Any other stylus change is taken at the clearance level or above.
+    first move after it to stay there (:func:`probegen.planning.orient.first_after`,
+    ``PlanningError``): the route is the program's own moves, checked as every move is;
+    nothing is assumed.  Any other stylus change is taken at the clearance level or
+    above.
     """
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -380,7 +389,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             progress(1)
         if isinstance(node, ir.Orient | ir.SelectStylus) and needs_index(node, machine):
             if part is None:
-                raise PlanningError(f"{_change(node)}: the check of a change taken at the "
+                raise PlanningError(f"{change_name(node)}: the check of a change taken at the "
                                     "index height needs the part model, found none")
             before = stylus
             if isinstance(node, ir.SelectStylus):
@@ -390,7 +399,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             here = None if pos is None else to_work(frame, pos)
             if here is None or here[2] < height - LEVEL_SLACK:
                 found = "an unknown position" if here is None else f"work z = {here[2]:.3f}"
-                raise CollisionError(f"{_change(node)}: the probe stands at {found}, expected "
+                raise CollisionError(f"{change_name(node)}: the probe stands at {found}, expected "
                                      f"the index height {height:.3f} or above")
             if isinstance(node, ir.Orient):
                 obstacle = obstacle_for(part.turned(node.rotation), [])
@@ -424,7 +433,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             else:
                 if entering is not None:
                     assert part is not None
-                    _first_after(entering, frame, target, part, stylus, machine, clear)
+                    first_after(entering, frame, target, part, stylus, machine, clear)
                 if pos is not None:
                     check(pos, target, pos_extra, extra, node.mode.value)
             entering = None
@@ -447,50 +456,9 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     return ClearanceReport(tuple(out))
 
 
-def _change(node: ir.Orient | ir.SelectStylus) -> str:
-    """``orientation change to A90B90`` or ``stylus change to D2``."""
-    if isinstance(node, ir.Orient):
-        return f"orientation change to {node.name}"
-    return f"stylus change to {node.label}"
-
-
 def _stylus_of(node: ir.SelectStylus) -> Stylus:
     """The stylus a ``SelectStylus`` takes, as the check sees it."""
     return Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
-
-
-def _first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
-                 target: np.ndarray, part: Part, stylus: Stylus, machine: MachineProfile,
-                 clear: float) -> None:
-    """The first move after a change taken at the index height goes to a point at that
-    height (the over point: the probe moves level at the index height, then down).
-
-    After a five-axis ``Orient`` (rotary axes, no head: the table turns under the
-    spindle, and the dialect's length-offset block brings the probe down the new tool
-    axis to the frame's clearance level at whatever point of the frame the turn left it
-    over, ``G0 G43 H Z``) the over point and that level must also lie above the turned
-    part's top by the ball and half the margin, so that any move between them is clear.
-
-    Raises:
-        PlanningError: the move goes below the index height.
-        CollisionError: the five-axis levels are too low.
-    """
-    height = index_height(part, stylus.length, stylus.ball, machine)
-    work = to_work(frame, target)
-    if work[2] < height - LEVEL_SLACK:
-        raise PlanningError(f"{_change(change)}: the first move after it goes to work "
-                            f"z = {work[2]:.3f}, expected the index height {height:.3f} "
-                            "(the over point)")
-    if not isinstance(change, ir.Orient) or change.head is not None or not change.rotary:
-        return
-    floor = part.turned(change.rotation).bbox_max[2] + stylus.ball + clear
-    for what, z in (("its clearance level", change.clearance_z),
-                    ("the over point", float(target[2]))):
-        if z < floor - LEVEL_SLACK:
-            raise CollisionError(f"{_change(change)}: {what} is at frame z = {z:.3f}, "
-                                 f"expected {floor:.3f} or above (the turned part's top "
-                                 "plus the ball and half the margin): the probe comes down "
-                                 "the tool axis there after the table turns")
 
 
 SLANT_FACTOR = 0.9

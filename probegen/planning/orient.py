@@ -30,12 +30,12 @@ import itertools
 import math
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
 from probegen import ir
-from probegen.errors import PlanningError, ProbegenError
+from probegen.errors import CollisionError, PlanningError, ProbegenError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
 
@@ -288,6 +288,49 @@ def over_point(target: np.ndarray, height: float, rotation: frames.Rotation) -> 
         return np.array([target[0], target[1], target[2] + rise])
     u = rise / (1.0 - a[2] * a[2])
     return np.asarray(target + u * np.array([0.0, 0.0, 1.0]) - u * a[2] * a)
+
+
+def change_name(node: ir.Orient | ir.SelectStylus) -> str:
+    """``orientation change to A90B90`` or ``stylus change to D2``."""
+    if isinstance(node, ir.Orient):
+        return f"orientation change to {node.name}"
+    return f"stylus change to {node.label}"
+
+
+def first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
+                 target: np.ndarray, part: Part, stylus: Any, machine: MachineProfile,
+                 clear: float) -> None:
+    """The first move after a change taken at the index height goes to a point at that
+    height (the over point: the probe moves level at the index height, then down).
+    ``target``: the move's target in ``frame``; ``stylus``: the collision check's
+    (``ball`` radius and ``length``, mm); ``clear``: half the margin, mm.
+
+    After a five-axis ``Orient`` (rotary axes, no head: the table turns under the
+    spindle, and the dialect's length-offset block brings the probe down the new tool
+    axis to the frame's clearance level at whatever point of the frame the turn left it
+    over, ``G0 G43 H Z``) the over point and that level must also lie above the turned
+    part's top by the ball and half the margin, so that any move between them is clear.
+
+    Raises:
+        PlanningError: the move goes below the index height.
+        CollisionError: the five-axis levels are too low.
+    """
+    height = index_height(part, stylus.length, stylus.ball, machine)
+    work = to_work(frame, target)
+    if work[2] < height - LEVEL_SLACK:
+        raise PlanningError(f"{change_name(change)}: the first move after it goes to work "
+                            f"z = {work[2]:.3f}, expected the index height {height:.3f} "
+                            "(the over point)")
+    if not isinstance(change, ir.Orient) or change.head is not None or not change.rotary:
+        return
+    floor = part.turned(change.rotation).bbox_max[2] + stylus.ball + clear
+    for what, z in (("its clearance level", change.clearance_z),
+                    ("the over point", float(target[2]))):
+        if z < floor - LEVEL_SLACK:
+            raise CollisionError(f"{change_name(change)}: {what} is at frame z = {z:.3f}, "
+                                 f"expected {floor:.3f} or above (the turned part's top "
+                                 "plus the ball and half the margin): the probe comes down "
+                                 "the tool axis there after the table turns")
 
 
 Group = tuple[str, Hashable]
