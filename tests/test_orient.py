@@ -307,6 +307,19 @@ def test_the_check_refuses_a_change_below_the_index_height_and_a_dive_after_it(
                                              rf"z = 60\.000, expected the index height "):
         check_program(ir.Program(p.program.setup, (*body[:start - 1], low, *body[start:])),
                       obstacle, [], machine, part=loaded)
+    # the Orient itself at 60 (the CMM's stylus change before it left out)
+    orient = body[k]
+    assert isinstance(orient, ir.Orient)
+    with pytest.raises(CollisionError, match=rf"orientation change to {orient.name}: the "
+                                             r"probe stands at work z = 60\.000"):
+        check_program(ir.Program(p.program.setup, (*body[:start - 1], low, *body[k:])),
+                      obstacle, [], machine, part=loaded)
+    # down to 60 after a CMM's stylus change, before the Orient: the move leaves the height
+    if kind == "head":
+        with pytest.raises(PlanningError, match=rf"stylus change to {name}: the first move "
+                                                r"after it goes to work z = 60\.000"):
+            check_program(ir.Program(p.program.setup, (*body[:k], low, *body[k:])), obstacle,
+                          [], machine, part=loaded)
     # no move before the change: the probe's position is unknown
     with pytest.raises(CollisionError, match="stands at an unknown position"):
         check_program(ir.Program(p.program.setup, tuple(body[start:])), obstacle, [],
