@@ -179,6 +179,18 @@ def is_narrow(f: Any, least: float) -> bool:
     return bool(f.inner and f.type == "cylinder" and 2.0 * f.radius < least - 1e-9)
 
 
+def eligibility(part: Any, machine: Any) -> tuple[set[int], set[int], set[int]]:
+    """The ids of the part's recognised revolved features that are fillets, narrow bores
+    (not fillets) and eligible (the others), for ``machine``'s rack."""
+    from probegen.cad.revolved import revolved_features
+
+    features = revolved_features(part)
+    least = least_bore(machine)
+    fillets = {f.id for f in features if is_fillet(f)}
+    narrow = {f.id for f in features if f.id not in fillets and is_narrow(f, least)}
+    return fillets, narrow, {f.id for f in features} - fillets - narrow
+
+
 # ------------------------------------------------------------------ reasons
 
 REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
@@ -186,8 +198,8 @@ REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
                      "no orientation")),
     ("setup", ("needs a setup", "closed above")),
     ("blind depth", ("blind, depth", "blind depth")),
-    ("stylus too large", ("a smaller stylus", "or more:", "smallest stylus")),
     ("arc too short", ("arc too short",)),
+    ("stylus too large", ("a smaller stylus", "or more:", "smallest stylus")),
     ("collision", ("no room", "collides", "no touch can be reached safely")),
     ("not accessible", ("not accessible", "centre lies in material", "no arc of the section")),
     ("no spec kind", ("no spec kind",)),
@@ -246,19 +258,14 @@ class Row:
 def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
         simulate: bool) -> Row:
     """Plan one loaded model with one profile and write its program."""
-    from probegen.cad.revolved import revolved_features
     from probegen.dialects import get_dialect
     from probegen.errors import ProbegenError
     from probegen.planning import plan_program
     from probegen.planning.revolved_spec import all_revolved_spec
 
     row = Row(model.stem, case.key, load_s=load_s)
-    features = revolved_features(part)
-    least = least_bore(machine)
-    row.recognised = len(features)
-    fillets = {f.id for f in features if is_fillet(f)}
-    narrow = {f.id for f in features if f.id not in fillets and is_narrow(f, least)}
-    eligible = {f.id for f in features} - fillets - narrow
+    fillets, narrow, eligible = eligibility(part, machine)
+    row.recognised = len(fillets | narrow | eligible)
     row.fillets, row.narrow, row.eligible = len(fillets), len(narrow), len(eligible)
     dialect = get_dialect(case.dialect)
     t0, c0 = time.perf_counter(), time.process_time()

@@ -153,3 +153,49 @@ def test_init_skeleton_compiles_unchanged(name: str, tmp_path: Path) -> None:
     text = _init(PARTS / f"{name}.step", spec)
     assert "\n[[feature]]\n" in text
     _compiles(spec, tmp_path / "out")
+
+
+def test_benchmark_counts_fillets_narrow_bores_and_reasons(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """benchmarks/bench_real_parts.py on our parts with its stand-in CMM (a rack of 3, 1,
+    2 and 6 mm balls, margin 0.5: the smallest bore 3 mm): the block's four rounded
+    edges and the flange's foot are fillets, the 1.5 and 2.5 mm holes are narrow; a
+    left-out line is classed by its first reason."""
+    from dataclasses import replace
+
+    monkeypatch.syspath_prepend(str(REPO / "benchmarks"))
+    import bench_real_parts as bench
+
+    case = replace(bench.CASES["cmm"], sample=tmp_path / "absent.toml")
+    machine, where = bench.load_case(case, tmp_path)
+    assert where.startswith("stand-in")
+    assert [s.ball_diameter for s in machine.styli()] == [3.0, 1.0, 2.0, 6.0]
+    assert bench.least_bore(machine) == pytest.approx(3.0)
+    counts = {}
+    for name in NAMES:
+        fillets, narrow, eligible = bench.eligibility(
+            cad.load_part(PARTS / f"{name}.step"), machine)
+        counts[name] = (len(fillets), len(narrow), len(eligible))
+    assert counts == {"five_face_block": (4, 0, 6), "small_holes": (0, 2, 2),
+                      "counterbores": (0, 0, 8), "flange": (1, 0, 9), "odd_angle": (0, 0, 3)}
+    lines = {
+        "R1 bore D8.000 (cylinder, faces 9): axis (-0.6060, 0.0000, 0.7955) is 37.3 deg "
+        "from Z, not along the probe: needs an orientation or a setup; bore D8.000: the "
+        "stylus ball D6.000 needs D8.000 or more: a smaller stylus": "orientation",
+        "R2 bore D12.000 (cylinder, faces 10): closed above: material at z = 15.0000 over "
+        "the centre: reach it from below: needs a setup": "setup",
+        "R4 bore D4.000 (cylinder, faces 9): bore D4.000: the stylus ball D6.000 needs "
+        "D8.000 or more: a smaller stylus": "stylus too large",
+        "R6 torus D54.000 tube D4.000 (torus, faces 7): no touch can be reached safely: no "
+        "room: the stylus ball meets face 1 (a smaller or longer stylus, or another "
+        "orientation) [no touch]": "collision",
+        "R9 bore D3.000 (cylinder, faces 2): blind, depth 0.400 mm: the ball reaches no "
+        "section (it needs 3.500 mm below one: radius 3.000 + margin 0.500): a smaller "
+        "stylus [x]": "blind depth",
+        "R221 bore D36.000 (cylinder, faces 439): the section's centre lies in material":
+            "not accessible",
+        "R3 boss D4.000 (cylinder, faces 3): arc too short: the longest arc on the faces "
+        "is 3.142 mm, the ball D6.000 needs 7.000 mm: a smaller stylus": "arc too short",
+        "R5 thing": "other",
+    }
+    assert {line: bench.reason_of(line) for line in lines} == lines
