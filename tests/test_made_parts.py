@@ -21,6 +21,8 @@ from test_init import _compiles, _init
 
 from probegen import cad
 from probegen.cad.revolved import revolved_features
+from probegen.cli.app import main
+from probegen.errors import ExitCode
 
 PARTS = REPO / "samples/parts"
 NAMES = ("five_face_block", "small_holes", "counterbores", "flange", "odd_angle")
@@ -153,6 +155,26 @@ def test_init_skeleton_compiles_unchanged(name: str, tmp_path: Path) -> None:
     text = _init(PARTS / f"{name}.step", spec)
     assert "\n[[feature]]\n" in text
     _compiles(spec, tmp_path / "out")
+
+
+ISSUE17_PROFILES = {"cmm": "dmis", "vmc-5axis-fanuc": "fanuc"}
+"""The issue's sample profiles and the dialect each writes; tested where they exist."""
+WITH_PROFILES = [(n, p) for p in sorted(ISSUE17_PROFILES)
+                 if (REPO / f"samples/machines/{p}.toml").exists() for n in NAMES]
+
+
+@pytest.mark.parametrize(("name", "profile"), WITH_PROFILES)
+def test_init_with_the_issue_profiles_compiles(name: str, profile: str,
+                                               tmp_path: Path) -> None:
+    """``probegen init`` with the CMM (to DMIS) and the five-axis (to Fanuc) profiles."""
+    machine = REPO / f"samples/machines/{profile}.toml"
+    spec = tmp_path / f"{name}.toml"
+    assert main(["-q", "init", str(PARTS / f"{name}.step"), "--machine", str(machine),
+                 "-o", str(spec)]) == ExitCode.OK
+    dialect = ISSUE17_PROFILES[profile]
+    assert main(["-q", "compile", str(spec), "-d", dialect, "-o",
+                 str(tmp_path / "out")]) == ExitCode.OK
+    assert (tmp_path / "out" / f"{name}.{'dmi' if dialect == 'dmis' else 'nc'}").is_file()
 
 
 def test_benchmark_counts_fillets_narrow_bores_and_reasons(
