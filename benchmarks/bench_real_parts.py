@@ -83,29 +83,32 @@ CASES = {
                          "macrob"),
 }
 
-_RACK = {"cmm": (("D3", 3.0, 2.0, 30.0, 23), ("D1", 1.0, 0.7, 20.0, 21),
-                 ("D2", 2.0, 1.4, 20.0, 22), ("D6", 6.0, 4.5, 50.0, 20)),
-         "5axis": (("D6", 6.0, 4.5, 50.0, 20), ("D2", 2.0, 1.4, 30.0, 21))}
+_RACK = {"cmm": (("D3", 3.0, 2.0, 40.0, 1), ("D1", 1.0, 0.7, 20.0, 0),
+                 ("D2", 2.0, 1.4, 30.0, 0), ("D6", 6.0, 4.5, 50.0, 0)),
+         "5axis": (("D6", 6.0, 4.5, 50.0, 20), ("D3", 3.0, 2.0, 40.0, 21),
+                   ("D2", 2.0, 1.4, 30.0, 22))}
 """Stand-in racks: (label, ball, shank, length, tool number); the first is [probe]'s."""
 STAND_INS = {
     "cmm": ('name = "Stand-in bridge CMM, PH10-like head (bench_real_parts)"',
-            'dialect = "dmis"', "\n[head]\na = [0.0, 105.0]\nb = [-180.0, 180.0]\n"
-            "step = 7.5\n"),
+            'dialect = "dmis"', 0.3, "\n[head]\na = [0.0, 105.0]\nb = [-180.0, 180.0]\n"
+            "step = 7.5\nbody_diameter = 14.0\nbody_length = 65.0\n"),
     "5axis": ('name = "Stand-in trunnion five-axis, Fanuc G68.2 (bench_real_parts)"',
-              'dialect = "fanuc"', '\n[tilt]\ncommand = "G68.2"\ntilt_axis = "A"\n'
+              'dialect = "fanuc"', 0.5, '\n[tilt]\ncommand = "G68.2"\ntilt_axis = "A"\n'
               'rotary_axis = "C"\ntilt_range = [-110.0, 110.0]\n'),
 }
 """Stand-in profiles (design17.md's keys) made from samples/machines/vmc-fanuc.toml while
-the samples are not on this branch: name, dialect, the head or tilt table."""
+the samples are not on this branch: name, dialect, margin (mm), the head or tilt table;
+the styli, margins and head are those of the samples the ``rack`` lane wrote."""
 
 
 def stand_in_text(key: str) -> str:
-    """The stand-in profile's TOML: vmc-fanuc.toml with another name, dialect, [probe]
-    stylus, the rack, and a head (CMM) or a tilted plane (five-axis)."""
-    name, dialect, extra = STAND_INS[key]
+    """The stand-in profile's TOML: vmc-fanuc.toml with another name, dialect, margin,
+    [probe] stylus, the rack, and a head (CMM) or a tilted plane (five-axis)."""
+    name, dialect, margin, extra = STAND_INS[key]
     text = BASE.read_text(encoding="utf-8")
     text = re.sub(r'^name = ".*"$', name, text, count=1, flags=re.M)
     text = re.sub(r'^dialect = ".*"$', dialect, text, count=1, flags=re.M)
+    text = re.sub(r"^margin = [\d.]+", f"margin = {margin}", text, count=1, flags=re.M)
     label, ball, shank, length, tool = _RACK[key][0]
     for k, v in (("ball_diameter", ball), ("shank_diameter", shank), ("length", length),
                  ("tool_number", tool)):
@@ -138,7 +141,8 @@ def load_case(case: ProfileCase, folder: Path) -> tuple[Any, str]:
     path.write_text(base, encoding="utf-8")
     rack = tuple(Stylus(*s) for s in _RACK[case.key])
     profile = replace(load_profile(path), rack=rack,
-                      head=Head() if case.key == "cmm" else None,
+                      head=Head(body_diameter=14.0, body_length=65.0)
+                      if case.key == "cmm" else None,
                       tilt=Tilt() if case.key == "5axis" else None)
     return profile, "stand-in (rack, head/tilt set on the record)"
 

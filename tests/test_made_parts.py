@@ -180,9 +180,9 @@ def test_init_with_the_issue_profiles_compiles(name: str, profile: str,
 def test_benchmark_counts_fillets_narrow_bores_and_reasons(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """benchmarks/bench_real_parts.py on our parts with its stand-in CMM (a rack of 3, 1,
-    2 and 6 mm balls, margin 0.5: the smallest bore 3 mm): the block's four rounded
-    edges and the flange's foot are fillets, the 1.5 and 2.5 mm holes are narrow; a
-    left-out line is classed by its first reason."""
+    2 and 6 mm balls, margin 0.3: the smallest bore 2.4 mm): the block's four rounded
+    edges and the flange's foot are fillets, the 1.5 mm hole is narrow; a left-out line
+    is classed by its first reason."""
     from dataclasses import replace
 
     monkeypatch.syspath_prepend(str(REPO / "benchmarks"))
@@ -192,13 +192,13 @@ def test_benchmark_counts_fillets_narrow_bores_and_reasons(
     machine, where = bench.load_case(case, tmp_path)
     assert where.startswith("stand-in")
     assert [s.ball_diameter for s in machine.styli()] == [3.0, 1.0, 2.0, 6.0]
-    assert bench.least_bore(machine) == pytest.approx(3.0)
+    assert bench.least_bore(machine) == pytest.approx(2.4)
     counts = {}
     for name in NAMES:
         fillets, narrow, eligible = bench.eligibility(
             cad.load_part(PARTS / f"{name}.step"), machine)
         counts[name] = (len(fillets), len(narrow), len(eligible))
-    assert counts == {"five_face_block": (4, 0, 6), "small_holes": (0, 2, 2),
+    assert counts == {"five_face_block": (4, 0, 6), "small_holes": (0, 1, 3),
                       "counterbores": (0, 0, 8), "flange": (1, 0, 9), "odd_angle": (0, 0, 3)}
     lines = {
         "R1 bore D8.000 (cylinder, faces 9): axis (-0.6060, 0.0000, 0.7955) is 37.3 deg "
