@@ -24,8 +24,9 @@ dialect's text).  Prints per model and profile:
 * the time: load and recognition, planning, emitting, wall clock (and CPU).
 
 Options: ``--profile cmm`` or ``--profile 5axis`` (default both), ``--vm`` runs each
-program on the virtual CMM or machine (the part at its nominal place, a perfect probe of
-the starting stylus's ball), ``--json PATH`` writes the figures, ``--notes`` prints every
+program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL --machine
+PROFILE`` does (the part at its nominal place, a perfect probe, the profile's rack and
+trunnion), ``--json PATH`` writes the figures, ``--notes`` prints every
 left-out line.
 """
 
@@ -121,20 +122,21 @@ def stand_in_text(key: str) -> str:
     return text + rack + extra
 
 
-def load_case(case: ProfileCase, folder: Path) -> tuple[Any, str]:
-    """The case's profile and where it came from: the sample when it exists, else the
-    stand-in written into ``folder`` (its rack, head and tilt set on the loaded record
-    when this branch's parser does not know the keys yet)."""
+def load_case(case: ProfileCase, folder: Path) -> tuple[Any, Path, str]:
+    """The case's profile, its file and where it came from: the sample when it exists,
+    else the stand-in written into ``folder`` (its rack, head and tilt set on the loaded
+    record when this branch's parser does not know the keys yet; the file then holds
+    the rest, for ``probegen sim``)."""
     from probegen.errors import ProbegenError
     from probegen.machine.profile import Head, Stylus, Tilt, load_profile
 
     if case.sample.exists():
-        return load_profile(case.sample), str(case.sample.relative_to(REPO))
+        return load_profile(case.sample), case.sample, str(case.sample.relative_to(REPO))
     path = folder / f"stand-in-{case.key}.toml"
     text = stand_in_text(case.key)
     path.write_text(text, encoding="utf-8")
     try:
-        return load_profile(path), "stand-in (keys parsed)"
+        return load_profile(path), path, "stand-in (keys parsed)"
     except ProbegenError:
         pass
     base = text.split("\n[[probe.stylus]]", 1)[0]
@@ -144,7 +146,7 @@ def load_case(case: ProfileCase, folder: Path) -> tuple[Any, str]:
                       head=Head(body_diameter=14.0, body_length=65.0)
                       if case.key == "cmm" else None,
                       tilt=Tilt() if case.key == "5axis" else None)
-    return profile, "stand-in (rack, head/tilt set on the record)"
+    return profile, path, "stand-in (rack, head/tilt set on the record)"
 
 
 # ------------------------------------------------------------------ eligibility
@@ -260,8 +262,9 @@ class Row:
 
 
 def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
-        simulate: bool) -> Row:
-    """Plan one loaded model with one profile and write its program."""
+        simulate: Path | None) -> Row:
+    """Plan one loaded model with one profile and write its program; with ``simulate``
+    (the profile's file) run it on the virtual CMM or machine."""
     from probegen.dialects import get_dialect
     from probegen.errors import ProbegenError
     from probegen.planning import plan_program
@@ -294,26 +297,37 @@ def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
     except ProbegenError as exc:
         row.emit = f"refused: {str(exc)[:70]}"
         return row
-    if simulate:
-        row.vm = simulate_program(model, text, case, machine, row.touches)
+    if simulate is not None:
+        row.vm = simulate_program(model, text, case, simulate, row.touches)
     return row
 
 
-def simulate_program(model: Path, text: str, case: ProfileCase, machine: Any,
+def simulate_program(model: Path, text: str, case: ProfileCase, profile: Path,
                      touches: int) -> str:
-    """The program on the virtual CMM or machine: ``no alarm``, or the alarm."""
-    from probegen import cad
-    from probegen.machine.probe_model import ProbeModel
-    from probegen.sim.contact import PlacedPart
-    from probegen.sim.vm import VirtualMachine, run_text
+    """The program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL
+    --machine PROFILE`` runs it (the part at its nominal place, a perfect probe, the
+    profile's rack and trunnion): ``no alarm``, or the alarm or error."""
+    import contextlib
+    import io
 
-    vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
-                        ProbeModel(machine.probe.ball_radius))
-    res = run_text(text, vm, kind=case.kind, source=model.name)
-    if res.alarm is not None:
-        return f"ALARM {res.alarm}"
-    return "no alarm" + ("" if res.touches == touches else
-                         f" ({res.touches} of {touches} touches)")
+    from probegen.cli.app import main as cli
+
+    with tempfile.TemporaryDirectory() as tmp:
+        program = Path(tmp) / f"{model.stem}.{'dmi' if case.kind == 'dmis' else 'nc'}"
+        program.write_text(text, encoding="ascii")
+        said = io.StringIO()
+        with contextlib.redirect_stderr(said), contextlib.redirect_stdout(said):
+            code = cli(["-q", "sim", str(program), "--part", str(model), "--machine",
+                        str(profile), "-o", str(Path(tmp) / "sim.log")])
+    out = said.getvalue()
+    alarm = re.search(r"stopped on alarm (.*)", out)
+    if alarm:
+        return f"ALARM {alarm[1][:80]}"
+    if code:
+        return f"ALARM sim exit {code}: {' '.join(out.split())[:80]}"
+    made = re.search(r"\((\d+) touches\)", out)
+    count = int(made[1]) if made else -1
+    return "no alarm" + ("" if count == touches else f" ({count} of {touches} touches)")
 
 
 # ------------------------------------------------------------------ tables
@@ -385,9 +399,9 @@ def main(argv: list[str]) -> int:
     cases = [CASES[k] for k in (args.profile or ["cmm", "5axis"])]
     rows: list[Row] = []
     with tempfile.TemporaryDirectory() as tmp:
-        machines = {}
+        machines, files = {}, {}
         for case in cases:
-            machines[case.key], where = load_case(case, Path(tmp))
+            machines[case.key], files[case.key], where = load_case(case, Path(tmp))
             print(f"{case.key}: {where}, to {case.dialect}; styli "
                   + ", ".join(f"{s.label} D{s.ball_diameter:g}"
                               for s in machines[case.key].styli())
@@ -401,7 +415,8 @@ def main(argv: list[str]) -> int:
                 continue
             load_s = time.perf_counter() - t0
             for case in cases:
-                row = run(part, model, case, machines[case.key], load_s, args.vm)
+                row = run(part, model, case, machines[case.key], load_s,
+                          files[case.key] if args.vm else None)
                 rows.append(row)
                 share = "-" if row.share is None else f"{100.0 * row.share:.0f} %"
                 print(f"{row.model} [{case.key}]: {row.recognised} recognised, "

@@ -189,7 +189,7 @@ def test_benchmark_counts_fillets_narrow_bores_and_reasons(
     import bench_real_parts as bench
 
     case = replace(bench.CASES["cmm"], sample=tmp_path / "absent.toml")
-    machine, where = bench.load_case(case, tmp_path)
+    machine, _path, where = bench.load_case(case, tmp_path)
     assert where.startswith("stand-in")
     assert [s.ball_diameter for s in machine.styli()] == [3.0, 1.0, 2.0, 6.0]
     assert bench.least_bore(machine) == pytest.approx(2.4)
