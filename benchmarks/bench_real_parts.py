@@ -200,14 +200,16 @@ def eligibility(part: Any, machine: Any) -> tuple[set[int], set[int], set[int]]:
 # ------------------------------------------------------------------ reasons
 
 REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("head grid", ("deg grid",)),
     ("orientation", ("not along the probe", "needs an orientation", "faces down",
-                     "no orientation")),
+                     "no orientation", "beyond the")),
     ("setup", ("needs a setup", "closed above")),
     ("blind depth", ("blind, depth", "blind depth")),
     ("arc too short", ("arc too short",)),
     ("stylus too large", ("a smaller stylus", "or more:", "smallest stylus")),
     ("collision", ("no room", "collides", "no touch can be reached safely")),
-    ("not accessible", ("not accessible", "centre lies in material", "no arc of the section")),
+    ("not accessible", ("not accessible", "centre lies in material", "no arc of the section",
+                        "no open end")),
     ("no spec kind", ("no spec kind",)),
 )
 """Reason classes of a left-out line, tried in this order against the line's first

@@ -218,6 +218,14 @@ def test_benchmark_counts_fillets_narrow_bores_and_reasons(
             "not accessible",
         "R3 boss D4.000 (cylinder, faces 3): arc too short: the longest arc on the faces "
         "is 3.142 mm, the ball D6.000 needs 7.000 mm: a smaller stylus": "arc too short",
+        "R69 boss D50.000 (cylinder, faces 141): axis at A 2.8 B -135.0: not on the head's "
+        "7.5 deg grid: needs a setup": "head grid",
+        "R74 bore D50.000 (cylinder, faces 159): axis at A 177.2 B -45.0: beyond the head's A "
+        "range 0..105: no orientation reaches this face: needs a setup": "orientation",
+        "R2 bore D12.000 (cylinder, faces 10): tilt 180.0 deg: beyond the A axis's range "
+        "-110..110: needs a setup": "orientation",
+        "R67 boss D50.000 (cylinder, faces 139): no open end to approach it from":
+            "not accessible",
         "R5 thing": "other",
     }
     assert {line: bench.reason_of(line) for line in lines} == lines
