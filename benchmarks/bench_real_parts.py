@@ -39,6 +39,7 @@ import re
 import sys
 import tempfile
 import time
+import traceback
 import warnings
 from collections import Counter
 from dataclasses import asdict, dataclass, field, replace
@@ -285,6 +286,11 @@ def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
         row.plan_s, row.plan_cpu = time.perf_counter() - t0, time.process_time() - c0
         row.error = str(exc)
         return row
+    except Exception as exc:  # noqa: BLE001 - a bug: noted, the other models still run
+        row.plan_s, row.plan_cpu = time.perf_counter() - t0, time.process_time() - c0
+        row.error = f"CRASH {type(exc).__name__}: {exc}"
+        traceback.print_exc()
+        return row
     row.plan_s, row.plan_cpu = time.perf_counter() - t0, time.process_time() - c0
     ids = {int(p.spec.id[1:]) for p in planned.revolved if p.spec.id[1:].isdigit()}
     row.planned, row.planned_eligible = len(planned.revolved), len(ids & eligible)
@@ -435,7 +441,7 @@ def main(argv: list[str]) -> int:
     if args.json:
         args.json.write_text(json.dumps([asdict(r) for r in rows], indent=1) + "\n",
                              encoding="utf-8")
-    return 1 if any(r.vm.startswith("ALARM") for r in rows) else 0
+    return 1 if any(r.vm.startswith("ALARM") or r.error.startswith("CRASH") for r in rows) else 0
 
 
 if __name__ == "__main__":
