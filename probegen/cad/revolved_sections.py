@@ -14,8 +14,9 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
+import OCP.Standard
 from OCP.gp import gp_Dir, gp_Lin, gp_Pnt
-from OCP.IntCurvesFace import IntCurvesFace_ShapeIntersector
+from OCP.IntCurvesFace import IntCurvesFace_Intersector, IntCurvesFace_ShapeIntersector
 
 from probegen.cad.exact import CLASSIFY_TOLERANCE
 from probegen.cad.faces import Vec3
@@ -70,6 +71,13 @@ def default_axials(kind: str, extent: tuple[float, float]) -> tuple[float, ...]:
     return (min(max(0.0, low + inset), high - inset),)
 
 
+OCCT_FAILURES: tuple[type[Exception], ...] = tuple(
+    e for name in dir(OCP.Standard) if name.startswith("Standard_")
+    and isinstance(e := getattr(OCP.Standard, name), type) and issubclass(e, Exception))
+"""OCCT's exceptions as OCP raises them (each its own class: ``Standard_NullObject`` is
+not a ``Standard_Failure`` in Python)."""
+
+
 class _Queries:
     """The exact face tests and the ray caster of one part, built on first use."""
 
@@ -85,10 +93,29 @@ class _Queries:
             self._rays.Load(self.model._shape.wrapped, CLASSIFY_TOLERANCE)
         top = self.model.bbox_max[2] - float(point[2]) + 1.0
         line = gp_Lin(gp_Pnt(*map(float, point)), gp_Dir(0.0, 0.0, 1.0))
-        self._rays.Perform(line, SAME_LENGTH, max(top, 2.0 * SAME_LENGTH))
+        try:
+            self._rays.Perform(line, SAME_LENGTH, max(top, 2.0 * SAME_LENGTH))
+        except OCCT_FAILURES:
+            return self._hits_face_by_face(line, max(top, 2.0 * SAME_LENGTH))
         if not self._rays.IsDone():
             return []
         return sorted(self._rays.WParameter(i) for i in range(1, self._rays.NbPnt() + 1))
+
+    def _hits_face_by_face(self, line: gp_Lin, far: float) -> list[float]:
+        """:meth:`hits_up` one face at a time, where OCCT's whole-shape intersector fails
+        on a face (seen on NIST CTC 4 along a horizontal ray: ``Standard_NullObject``); a
+        face whose own intersection fails is passed over (the collision check of every
+        planned move, on the mesh, stays the judge of what is in the way)."""
+        hits: list[float] = []
+        for face in self.model._topo_faces:
+            try:
+                one = IntCurvesFace_Intersector(face, CLASSIFY_TOLERANCE)
+                one.Perform(line, SAME_LENGTH, far)
+            except OCCT_FAILURES:
+                continue
+            if one.IsDone():
+                hits += [one.WParameter(i) for i in range(1, one.NbPnt() + 1)]
+        return sorted(hits)
 
 
 def _queries(part: Part) -> _Queries:
