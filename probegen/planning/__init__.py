@@ -33,7 +33,13 @@ from probegen.planning.revolved import Comparison
 from probegen.planning.revolved_spec import RevolvedPlan, plan_revolved
 from probegen.planning.setup import calibration_header, make_setup, part_of, setup_for
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
-from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
+from probegen.planning.travel import (
+    Linker,
+    linked_nodes,
+    over_obstacles,
+    stop_of,
+    tour_figures,
+)
 from probegen.spec.actions import PlanarSpec
 from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
 
@@ -134,11 +140,13 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
             progress(1)
     tour = figures = None
     obstacle = obstacle_for(part, [p.sphere for p in plans])
+    sweeper = Sweeper(obstacle, machine, machine.probe.ball_radius)
+    body = over_obstacles(body, sweeper, spec.clearance_z)
     if revolved:
         stops = [stop_of(r) for r in revolved]
-        linker = Linker(Sweeper(obstacle, machine, machine.probe.ball_radius), stops,
-                        spec.clearance_z)
-        tour = order_stops(stops, clearance_z=spec.clearance_z, route=linker.route)
+        linker = Linker(sweeper, stops, spec.clearance_z)
+        tour = order_stops(stops, clearance_z=spec.clearance_z, route=linker.route,
+                           cost=linker.time)
         revolved = [revolved[k] for k in tour.order]
         nodes = linked_nodes(revolved, machine, spec.clearance_z, linker)
         figures = tour_figures(revolved, nodes, machine, spec.clearance_z)

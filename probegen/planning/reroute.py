@@ -9,9 +9,9 @@ required clearance) and the path is rebuilt from what clears:
    is dropped (only that touch).
 2. *Legs*: between consecutive kept stations the planned moves (safe-circle
    transitions, axial links, and the safe points of dropped touches passed through);
-   when they do not clear, a lift to a local height (``LIFT_HEIGHTS`` above the higher
-   end) or to the clearance level; when nothing clears, the stations fall into
-   separate *runs*.
+   when they do not clear, a lift over what is in the way (:meth:`Sweeper.lift`: up,
+   across at the lowest local height the collision check clears, down) or to the
+   clearance level; when nothing clears, the stations fall into separate *runs*.
 3. *Access*: a station can be entered or left straight along Z from the clearance
    level when that move clears.  A run is entered at its first station with access,
    goes back to its start, along to its end and back to its last station with access
@@ -25,6 +25,7 @@ Paths that cleared unchanged come back unchanged (byte-identical programs).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -33,12 +34,26 @@ from numpy.typing import ArrayLike
 
 from probegen.errors import CollisionError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import Obstacle, Stylus, describe, fmt, swept, touch_stop
+from probegen.planning.collision import (
+    MESH_TOLERANCE,
+    MIN_STEP,
+    MeshObstacle,
+    Obstacle,
+    Stylus,
+    describe,
+    fmt,
+    swept,
+    touch_stop,
+)
+from probegen.planning.heightmap import FCL_SLACK, height_map
 from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint
 
+Vec3 = tuple[float, float, float]
 LIFT_HEIGHTS = (5.0, 15.0)
-"""Local lift heights tried between two stations, mm above the higher of the two,
-before the clearance level."""
+"""Lift heights tried, mm above the higher end of a link, after the local height (or
+instead of it when the obstacle has no mesh) and before the clearance level."""
+LIFT_STEP = 0.5
+"""Local heights are rounded up to this, mm (tidy coordinates in the program)."""
 
 
 class Sweeper:
@@ -55,6 +70,7 @@ class Sweeper:
         self.obstacle = obstacle
         self.stylus = Stylus(ball, probe.shank_diameter / 2.0, probe.length)
         self.required = machine.margin / 2.0
+        self.feeds = machine.feeds
 
     def move(self, a: ArrayLike, b: ArrayLike, *, touch: bool = False) -> str | None:
         """None when the straight move ``a → b`` (mm) clears, else what it runs into
@@ -76,6 +92,42 @@ class Sweeper:
                 return why
         return None
 
+    def local_height(self, a: Vec3, b: Vec3) -> float | None:
+        """The lowest ball-centre height (mm) at which the stylus crosses from above
+        ``a`` to above ``b`` clear of the part by the required distance, from the part's
+        height map (an upper bound of the mesh within the ball's and shank's reach of
+        the segment in XY; :mod:`probegen.planning.heightmap`), rounded up to
+        :data:`LIFT_STEP`; None without a mesh or with nothing under the way."""
+        if not isinstance(self.obstacle, MeshObstacle):
+            return None
+        s = self.stylus
+        q = self.required + MESH_TOLERANCE + MIN_STEP / 2.0 + FCL_SLACK
+        pa, pb = np.array([a], dtype=np.float64), np.array([b], dtype=np.float64)
+        top = float(height_map(self.obstacle).highest_along(pa, pb, max(s.ball, s.shank) + q)[0])
+        if not math.isfinite(top):
+            return None
+        return math.ceil((top + s.ball + q) / LIFT_STEP) * LIFT_STEP
+
+    def lift(self, a: Vec3, b: Vec3, ceiling: float) -> tuple[Vec3, ...] | None:
+        """The points (``a`` and ``b`` included) of the lowest clear lift from ``a`` to
+        ``b`` below ``ceiling`` (mm): straight up, across, straight down, at the lowest
+        of the local height (:meth:`local_height`, an upper bound: the height map
+        counts a triangle over its whole XY box) and :data:`LIFT_HEIGHTS` above the
+        higher end that clears; None when none does.  A lift at the height of the
+        higher end is a single climb or descent and the move across."""
+        top = max(a[2], b[2])
+        local = self.local_height(a, b)
+        heights = {top + h for h in LIFT_HEIGHTS}
+        if local is not None:
+            heights = {z for z in heights if z < local} | {max(local, top)}
+        for z in sorted(heights):
+            if z >= ceiling:
+                break
+            points = lift_points(a, b, z)
+            if self.path(points) is None:
+                return points
+        return None
+
     def touch(self, contact: ArrayLike, normal: ArrayLike,
               approach: float) -> str | None:
         """None when a touch from ``approach`` mm off the contact clears (as checked in
@@ -84,6 +136,13 @@ class Sweeper:
         r = self.stylus.ball
         return self.move(c + (r + approach) * n, touch_stop(c, n, r, self.required),
                          touch=True)
+
+
+def lift_points(a: Vec3, b: Vec3, z: float) -> tuple[Vec3, ...]:
+    """``a``, above ``a`` at ``z``, above ``b`` at ``z``, ``b``; without the repeated
+    point where an end lies at ``z``."""
+    points = [a, (a[0], a[1], z), (b[0], b[1], z), b]
+    return tuple(p for k, p in enumerate(points) if k == 0 or p != points[k - 1])
 
 
 class RerouteError(CollisionError):
@@ -181,16 +240,16 @@ class _Router:
         why = self.sweeper.path(self._positions([sa, *planned, sb]))
         if why is None:
             return planned, ""
-        top = max(sa.position[2], sb.position[2])
-        heights = [top + h for h in LIFT_HEIGHTS if top + h < self.plan.clear_z]
-        for z in [*heights, self.plan.clear_z]:
-            kind = PathKind.CLEAR if z == self.plan.clear_z else PathKind.LIFT
-            lift = [_at(sa, z, kind), _at(sb, z, kind)]
-            if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
-                if z != self.plan.clear_z:
-                    self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
-                                      f"z = {z:.3f}, the planned move {why}")
-                return lift, ""
+        clear = self.plan.clear_z
+        points = self.sweeper.lift(sa.position, sb.position, clear)
+        if points is not None:
+            lift = [PathPoint(PathKind.LIFT, q) for q in points[1:-1]]
+            self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
+                              f"z = {max(q[2] for q in points):.3f}, the planned move {why}")
+            return lift, ""
+        lift = [_at(sa, clear, PathKind.CLEAR), _at(sb, clear, PathKind.CLEAR)]
+        if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
+            return lift, ""
         return None, why
 
 
