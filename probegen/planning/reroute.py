@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from itertools import pairwise
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,7 +46,7 @@ from probegen.planning.collision import (
     swept,
     touch_stop,
 )
-from probegen.planning.heightmap import FCL_SLACK, height_map
+from probegen.planning.heightmap import FCL_SLACK, clear_segments, height_map
 from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint
 
 Vec3 = tuple[float, float, float]
@@ -84,8 +85,35 @@ class Sweeper:
         what = describe(self.obstacle, ball - q, shank - q, q, worst)
         return f"from {fmt(pa)} to {fmt(pb)}: {what}"
 
+    def refused(self, a: ArrayLike, b: ArrayLike) -> bool:
+        """True when the check certainly refuses the move ``a → b``: the ball swept along
+        it (a capsule) comes within ``required + MESH_TOLERANCE - MIN_STEP/2`` (less
+        fcl's slack) of the mesh, so a sample of the sweep lies closer than the check
+        accepts (a python-fcl collision test, far cheaper than the sweep it saves).
+        False when unsure."""
+        if not isinstance(self.obstacle, MeshObstacle):
+            return False
+        fcl = self.obstacle.fcl
+        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        length = float(np.linalg.norm(pb - pa))
+        radius = self.stylus.ball + self.required + MESH_TOLERANCE - MIN_STEP / 2 - FCL_SLACK
+        if length < 1e-9:
+            shape, rot = fcl.Sphere(radius), np.eye(3)
+        else:
+            shape = fcl.Capsule(radius, length)
+            rot = _onto((pb - pa) / length)
+        obj = fcl.CollisionObject(shape, fcl.Transform(rot, (pa + pb) / 2.0))
+        return bool(fcl.collide(obj, self.obstacle.part, fcl.CollisionRequest(),
+                                fcl.CollisionResult()))
+
     def path(self, points: Sequence[ArrayLike]) -> str | None:
-        """None when every move of the polyline clears, else the first collision."""
+        """None when every move of the polyline clears, else the first collision (the
+        height map's fast check first: :func:`probegen.planning.heightmap.clear_segments`,
+        then the exact sweeps)."""
+        ends = [np.asarray(p, dtype=np.float64) for p in points]
+        if clear_segments([list(pairwise(ends))], self.obstacle, self.stylus,
+                          self.required)[0]:
+            return None
         for a, b in zip(points[:-1], points[1:], strict=True):
             why = self.move(a, b)
             if why is not None:
@@ -124,7 +152,8 @@ class Sweeper:
             if z >= ceiling:
                 break
             points = lift_points(a, b, z)
-            if self.path(points) is None:
+            if not any(self.refused(p, q) for p, q in pairwise(points)) and (
+                    self.path(points) is None):
                 return points
         return None
 
@@ -136,6 +165,15 @@ class Sweeper:
         r = self.stylus.ball
         return self.move(c + (r + approach) * n, touch_stop(c, n, r, self.required),
                          touch=True)
+
+
+def _onto(z: np.ndarray) -> np.ndarray:
+    """A rotation (columns x, y, z) taking +Z onto the unit vector ``z``."""
+    x = np.array([0.0, z[2], -z[1]]) if abs(z[0]) < 0.9 else np.array([-z[2], 0.0, z[0]])
+    x /= math.sqrt(float(x @ x))
+    y = np.array([z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2],
+                  z[0] * x[1] - z[1] * x[0]])
+    return np.column_stack([x, y, z])
 
 
 def lift_points(a: Vec3, b: Vec3, z: float) -> tuple[Vec3, ...]:

@@ -35,7 +35,7 @@ from typing import Any
 from probegen import ir
 from probegen.machine.profile import Feeds, MachineProfile
 from probegen.planning.order import Stop
-from probegen.planning.reroute import Sweeper, lift_points
+from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import (
     Comparison,
     Figures,
@@ -100,7 +100,7 @@ class Linker:
         above = self.time(clearance_travel(a, b, self.clearance_z))
         if self.time((a, b)) >= above:
             return None  # no link below the clearance plane can be quicker
-        if self.sweeper.move(a, b) is None:
+        if not self.sweeper.refused(a, b) and self.sweeper.move(a, b) is None:
             return (a, b)
         # a lift at z is quicker than the clearance plane below this height
         across = math.hypot(b[0] - a[0], b[1] - a[1])
