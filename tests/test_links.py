@@ -140,3 +140,47 @@ def test_the_lift_is_the_lowest_local_height_the_check_clears(tmp_path: Path) ->
     assert sweeper.local_height(b, c) == pytest.approx(10.0 + ABOVE, abs=0.5)
     # a ceiling at or below the local height: no lift (the caller takes the clearance plane)
     assert sweeper.lift(a, b, local) is None
+
+
+class _Walls:
+    """A stand-in sweeper: every straight move is refused, every lift at z = 5 clears."""
+
+    def __init__(self) -> None:
+        from probegen.machine.profile import Feeds
+
+        self.feeds = Feeds(rapid=24000.0, position=2000.0, probe=300.0)
+        self.ceilings: list[float] = []
+
+    def refused(self, a: object, b: object) -> bool:
+        return True
+
+    def lift(self, a: tuple[float, float, float], b: tuple[float, float, float],
+             ceiling: float) -> tuple[tuple[float, float, float], ...] | None:
+        from probegen.planning.reroute import lift_points
+
+        self.ceilings.append(ceiling)
+        return lift_points(a, b, 5.0) if 5.0 < ceiling else None
+
+
+def test_a_feature_link_is_taken_only_when_quicker_than_the_clearance_plane() -> None:
+    from probegen.planning.order import Stop
+    from probegen.planning.travel import Linker, clearance_travel, travel_time
+
+    walls = _Walls()
+    near, far = (50.0, 0.0, 0.0), (1000.0, 0.0, 0.0)
+    origin = (0.0, 0.0, 0.0)
+    linker = Linker(walls, [Stop(origin, origin), Stop(near, near), Stop(far, far)],  # type: ignore[arg-type]
+                    CLEARANCE_Z)
+    # 50 mm: up 5, across, down 5 at 2000 mm/min (1.8 s) beats the clearance plane
+    # (200 mm up and down at 2000 mm/min and 50 mm at the rapid rate: 6.125 s)
+    assert linker.route(origin, near) == (origin, (0.0, 0.0, 5.0), (50.0, 0.0, 5.0), near)
+    assert travel_time(linker.route(origin, near), CLEARANCE_Z, walls.feeds) == (  # type: ignore[arg-type]
+        pytest.approx(1.8))
+    assert travel_time(clearance_travel(origin, near, CLEARANCE_Z), CLEARANCE_Z,
+                       walls.feeds) == pytest.approx(6.125)
+    # the lift was looked for only below the height where it stops being quicker
+    assert walls.ceilings == [pytest.approx(CLEARANCE_Z - 50.0 * (1.0 - 2000.0 / 24000.0) / 2)]
+    # 1000 mm: the clearance plane (6 s + 2.5 s) beats even the straight move (30 s): no
+    # link is looked for
+    assert linker.route(origin, far) is None
+    assert len(walls.ceilings) == 1
