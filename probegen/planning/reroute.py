@@ -9,14 +9,16 @@ required clearance) and the path is rebuilt from what clears:
    is dropped (only that touch).
 2. *Legs*: between consecutive kept stations the planned moves (safe-circle
    transitions, axial links, and the safe points of dropped touches passed through);
-   when they do not clear, a lift over what is in the way (:meth:`Sweeper.lift`: up,
+   when they do not clear, or go by the clearance level (between arcs or sections that
+   do not reach each other), a lift over what is in the way (:meth:`Sweeper.lift`: up,
    across at the lowest local height the collision check clears, down) or to the
    clearance level; when nothing clears, the stations fall into separate *runs*.
 3. *Access*: a station can be entered or left straight along Z from the clearance
    level when that move clears.  A run is entered at its first station with access,
    goes back to its start, along to its end and back to its last station with access
    (out-and-back only where the ends lack access); a run with no access at all is
-   dropped.  Runs are joined at the clearance level.
+   dropped.  Runs are joined by a lift from the end of one to the start of the next
+   where one clears (:meth:`Sweeper.lift`), else at the clearance level.
 
 The result keeps every touch that can be made safe; :class:`RerouteError` (a
 ``CollisionError``) names the feature, the move and the obstacle face when none can.
@@ -47,7 +49,7 @@ from probegen.planning.collision import (
     touch_stop,
 )
 from probegen.planning.heightmap import FCL_SLACK, clear_segments, height_map
-from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint
+from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint, path_length
 
 Vec3 = tuple[float, float, float]
 LIFT_HEIGHTS = (5.0, 15.0)
@@ -276,19 +278,24 @@ class _Router:
             planned += self.legs[k]
         sa, sb = self.stations[a].safe, self.stations[b].safe
         why = self.sweeper.path(self._positions([sa, *planned, sb]))
-        if why is None:
-            return planned, ""
         clear = self.plan.clear_z
+        if why is None and not any(p.kind is PathKind.CLEAR for p in planned):
+            return planned, ""
         points = self.sweeper.lift(sa.position, sb.position, clear)
+        if why is None and (points is None or path_length(points) >= path_length(
+                self._positions([sa, *planned, sb]))):
+            return planned, ""
         if points is not None:
             lift = [PathPoint(PathKind.LIFT, q) for q in points[1:-1]]
             self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
-                              f"z = {max(q[2] for q in points):.3f}, the planned move {why}")
+                              f"z = {max(q[2] for q in points):.3f}, "
+                              + ("not by the clearance level" if why is None
+                                 else f"the planned move {why}"))
             return lift, ""
         lift = [_at(sa, clear, PathKind.CLEAR), _at(sb, clear, PathKind.CLEAR)]
         if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
             return lift, ""
-        return None, why
+        return None, why or ""
 
 
 def _runs(router: _Router, kept: list[int]) -> list[list[tuple[int, list[PathPoint]]]]:
@@ -368,18 +375,22 @@ def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
     if not pieces:
         raise RerouteError(f"feature {plan.feature}: no touch can be reached safely: "
                            + "; ".join(router.notes))
-    safe = _assemble(plan, pieces)
+    safe = _assemble(plan, pieces, sweeper)
     return Rerouted(plan if safe.path == plan.path else safe, tuple(sorted(
         stations[k].safe.index for k in dropped)), tuple(router.notes))
 
 
-def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]]) -> FeaturePlan:
-    """Entry, the runs joined at the clearance level, exit; touches renumbered."""
+def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]],
+              sweeper: Sweeper) -> FeaturePlan:
+    """Entry, the runs joined by a lift or at the clearance level, exit; touches
+    renumbered."""
     z = plan.clear_z
     path: list[PathPoint] = [_at(pieces[0][0], z, PathKind.ENTRY)]
     for j, piece in enumerate(pieces):
         if j:
-            path += [_at(path[-1], z, PathKind.CLEAR), _at(piece[0], z, PathKind.CLEAR)]
+            lift = sweeper.lift(path[-1].position, piece[0].position, z)
+            path += ([PathPoint(PathKind.LIFT, q) for q in lift[1:-1]] if lift is not None
+                     else [_at(path[-1], z, PathKind.CLEAR), _at(piece[0], z, PathKind.CLEAR)])
         path += piece
     path.append(_at(path[-1], z, PathKind.EXIT))
     order = [p.index for p in path if p.kind is PathKind.TARGET]
