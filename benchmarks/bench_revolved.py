@@ -55,6 +55,7 @@ class Row:
     error: str | None = None
     notes: tuple[str, ...] = ()
     rerouted: int = 0
+    legs: tuple[float, float] = (0.0, 0.0)
 
 
 def why_unsafe(note: str) -> str:
@@ -137,6 +138,7 @@ def run(model: Path) -> Row:
         row.baseline = (f.baseline.length, f.baseline.time)
         row.bound = (f.lower_bound.length, f.lower_bound.time)
     row.tour = planned.tour.length if planned.tour is not None else 0.0
+    row.legs = lifted_legs(planned.revolved, machine)
     text = get_dialect("fanuc").generate(planned.program)
     t1 = time.perf_counter()
     vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),
@@ -146,6 +148,35 @@ def run(model: Path) -> Row:
     row.vm_touches = res.touches
     row.alarm = res.alarm
     return row
+
+
+def lifted_legs(plans: object, machine: object) -> tuple[float, float]:
+    """Nominal time (s) of the features' own lifts and clearance-level legs between two
+    safe points (the bound keeps them as they are) and of the straight chords instead."""
+    import math
+
+    from probegen.planning.revolved import PathKind, Segment, cycle_time
+
+    feeds, probe = machine.feeds, machine.probe  # type: ignore[attr-defined]
+    up = (PathKind.LIFT, PathKind.CLEAR)
+    ours = chord = 0.0
+    for p in plans:  # type: ignore[attr-defined]
+        path = p.plan.path
+        for i in range(1, len(path) - 1):
+            if path[i].kind in up or path[i + 1].kind not in up:
+                continue
+            j = i + 1
+            while path[j].kind in up:
+                j += 1
+            if path[j].kind is PathKind.EXIT:
+                continue
+            for points, kind in ((path[i:j + 1], "ours"), ((path[i], path[j]), "chord")):
+                t = cycle_time([Segment("protected", math.dist(a.position, b.position))
+                                for a, b in zip(points, points[1:], strict=False)],
+                               rapid=feeds.rapid, position_feed=feeds.position,
+                               probe_feed=feeds.probe, approach=probe.approach)
+                ours, chord = (ours + t, chord) if kind == "ours" else (ours, chord + t)
+    return ours, chord
 
 
 def table(rows: list[Row]) -> str:
@@ -190,6 +221,10 @@ def main(argv: list[str]) -> int:
         print(f"{r.model}: {r.planned} planned ({r.rerouted} rerouted), {r.skipped} left out "
               f"({reasons}); plan {r.plan_s:.1f} s (CPU {r.plan_cpu:.1f} s), VM {r.vm_s:.1f} s, "
               f"alarm {r.alarm}", flush=True)
+        if r.legs[0] and r.bound[1]:
+            print(f"  the features' own lifts and clearance-level legs: {r.legs[0]:.1f} s, "
+                  f"as straight chords {r.legs[1]:.1f} s: ours/bound with chords "
+                  f"{r.ours[1] / (r.bound[1] - r.legs[0] + r.legs[1]):.3f}")
         for n in r.notes:
             if reason_of(n).startswith(("collides", "no safe touch", "does not plan",
                                         "not accessible (other)")):

@@ -41,7 +41,13 @@ from probegen.planning.revolved_metrics import Figures
 from probegen.planning.revolved_spec import RevolvedPlan
 from probegen.planning.setup import calibration_header, make_setup, part_of, setup_for
 from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
-from probegen.planning.travel import Linker, linked_nodes, stop_of, tour_figures
+from probegen.planning.travel import (
+    Linker,
+    linked_nodes,
+    over_obstacles,
+    stop_of,
+    tour_figures,
+)
 from probegen.spec.actions import PlanarSpec
 from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
 
@@ -149,6 +155,8 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
             progress(1)
     tour = figures = None
     obstacle = obstacle_for(part, [p.sphere for p in plans])
+    sweeper = Sweeper(obstacle, machine, machine.probe.ball_radius)
+    body = over_obstacles(body, sweeper, spec.clearance_z)
     grouped = None
     if oriented:
         tours: list[tuple[Tour, Comparison]] = []
@@ -199,7 +207,7 @@ def _tour(members: Sequence[OrientedPlan], machine: MachineProfile,
     revolved = [p.plan for p in members]
     stops = [stop_of(r) for r in revolved]
     linker = Linker(Sweeper(obstacle, m, m.probe.ball_radius), stops, clear)
-    tour = order_stops(stops, clearance_z=clear, route=linker.route)
+    tour = order_stops(stops, clearance_z=clear, route=linker.route, cost=linker.time)
     revolved = [revolved[k] for k in tour.order]
     nodes = linked_nodes(revolved, m, clear, linker)
     figures = tour_figures(revolved, nodes, m, clear)

@@ -287,15 +287,25 @@ def clear_paths(paths: Sequence[Sequence[ir.Node]], obstacle: Obstacle, setup: i
     would too); False when unsure (check it exactly).  Paths are checked on their own,
     as :func:`check_program` checks ``ir.Program(setup, path)`` with no located features.
     """
-    result = np.zeros(len(paths), dtype=bool)
-    if not isinstance(obstacle, MeshObstacle) or not paths:
-        return result
     r = setup.ball_diameter / 2.0
     clear = machine.margin / 2.0
     probe = machine.probe
     stylus = Stylus(r, probe.shank_diameter / 2.0, probe.length)
+    return clear_segments([path_segments(p, r, clear) for p in paths], obstacle, stylus,
+                          clear)
+
+
+def clear_segments(segments: Sequence[Sequence[Segment] | None], obstacle: Obstacle,
+                   stylus: Stylus, clear: float) -> np.ndarray:
+    """For each path given by its segments (None: unsure): True when the fast check
+    clears every segment with the required clearance ``clear`` (mm), the first one
+    starting outside the part; False when unsure.  Cleared segments go into the
+    obstacle's sweep cache."""
+    result = np.zeros(len(segments), dtype=bool)
+    if not isinstance(obstacle, MeshObstacle) or not segments:
+        return result
+    r = stylus.ball
     q = clear + MESH_TOLERANCE + MIN_STEP / 2.0 + FCL_SLACK
-    segments = [path_segments(p, r, clear) for p in paths]
     flat = [(k, a, b) for k, segs in enumerate(segments) if segs for a, b in segs]
     if not flat:
         return result
@@ -308,7 +318,7 @@ def clear_paths(paths: Sequence[Sequence[ir.Node]], obstacle: Obstacle, setup: i
     shank = both | (hmap.highest_along(a, b, stylus.shank + q) <= low + r - q)
     above = hmap.highest_along(a, a, 0.0) < a[:, 2]
     swept = _Swept(obstacle, stylus, q)
-    ok = np.ones(len(paths), dtype=bool)
+    ok = np.ones(len(segments), dtype=bool)
     ok[[k for k, segs in enumerate(segments) if not segs]] = False
     first = np.ones(len(flat), dtype=bool)
     first[1:] = owner[1:] != owner[:-1]

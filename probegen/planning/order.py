@@ -4,8 +4,10 @@ Each feature is a *stop* with an entry point (where its path starts) and an exit
 (where it ends); the time inside a feature does not depend on the order, so only the
 travel between stops counts.  Travel from an exit to the next entry goes straight where
 the caller's predicate says the straight move is clear, else by the clearance plane:
-up from the exit, across, down to the entry.  Costs are therefore asymmetric, and the
-moves below are evaluated on the directed costs.
+up from the exit, across, down to the entry.  A travel costs its length, or what the
+caller's ``cost`` says (e.g. its time: a move across the clearance plane is a rapid, a
+link below it is not).  Costs are therefore asymmetric, and the moves below are
+evaluated on the directed costs.
 
 The tour is an open path: it starts at ``start`` (a point, e.g. the tool-change
 position) or, without one, at whichever stop is best, and it does not return.
@@ -23,6 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,6 +37,8 @@ Direct = Callable[[Vec3, Vec3], bool]
 Route = Callable[[Vec3, Vec3], "tuple[Vec3, ...] | None"]
 """``route(a, b)``: the points of a clear travel from ``a`` to ``b`` below the clearance
 plane (both ends included), or None."""
+Cost = Callable[[Sequence[Vec3]], float]
+"""``cost(points)``: what the travel through ``points`` costs (default: its length)."""
 
 IMPROVEMENT = 1e-9
 """A move must shorten the tour by more than this (mm) to be made: float noise must not
@@ -55,7 +60,7 @@ class Tour:
     """An order of the stops and its travel length.
 
     Attributes:
-        order: stop indices in visiting order.
+        order: stop indices in visiting order (the least total cost).
         length: travel from the start through every stop, mm.
         nearest: the nearest-neighbour order the improvement started from.
         nearest_length: its travel length, mm.
@@ -83,32 +88,41 @@ def travel_path(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None =
     return (a, (a[0], a[1], z), (b[0], b[1], z), b)
 
 
-def travel_length(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None = None,
-                  route: Route | None = None) -> float:
-    """Length of :func:`travel_path`, mm."""
-    points = travel_path(a, b, clearance_z=clearance_z, direct=direct, route=route)
+def polyline_length(points: Sequence[Vec3]) -> float:
+    """Length of the polyline through ``points``, mm."""
     return sum(math.dist(p, q) for p, q in zip(points, points[1:], strict=False))
 
 
+def travel_length(a: Vec3, b: Vec3, *, clearance_z: float, direct: Direct | None = None,
+                  route: Route | None = None) -> float:
+    """Length of :func:`travel_path`, mm."""
+    return polyline_length(travel_path(a, b, clearance_z=clearance_z, direct=direct,
+                                       route=route))
+
+
 def cost_matrix(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | None = None,
-                start: Vec3 | None = None, route: Route | None = None) -> FloatArray:
+                start: Vec3 | None = None, route: Route | None = None,
+                cost: Cost = polyline_length) -> FloatArray:
     """Travel costs with a start node.
 
     Returns:
         (n + 1, n + 1) float: row/column 0 is the start (costs from it to each entry;
         all 0 without a start; nothing travels back to it), ``[i + 1, j + 1]`` the
-        travel from stop ``i``'s exit to stop ``j``'s entry.
+        travel from stop ``i``'s exit to stop ``j``'s entry (``cost`` of
+        :func:`travel_path`).
     """
     n = len(stops)
     costs = np.zeros((n + 1, n + 1))
+
+    def one(a: Vec3, b: Vec3) -> float:
+        return cost(travel_path(a, b, clearance_z=clearance_z, direct=direct, route=route))
+
     for j, b in enumerate(stops, start=1):
         if start is not None:
-            costs[0, j] = travel_length(start, b.entry, clearance_z=clearance_z, direct=direct,
-                                        route=route)
+            costs[0, j] = one(start, b.entry)
         for i, a in enumerate(stops, start=1):
             if i != j:
-                costs[i, j] = travel_length(a.exit, b.entry, clearance_z=clearance_z,
-                                            direct=direct, route=route)
+                costs[i, j] = one(a.exit, b.entry)
     return costs
 
 
@@ -189,7 +203,8 @@ def improve(path: list[int], costs: FloatArray) -> list[int]:
 
 
 def order_stops(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | None = None,
-                start: Vec3 | None = None, route: Route | None = None) -> Tour:
+                start: Vec3 | None = None, route: Route | None = None,
+                cost: Cost | None = None) -> Tour:
     """Order the stops: nearest neighbour, improved by 2-opt and Or-opt.
 
     Args:
@@ -199,15 +214,19 @@ def order_stops(stops: Sequence[Stop], *, clearance_z: float, direct: Direct | N
         route: a clear travel below the clearance plane, when there is one (see
             :data:`Route`; tried before ``direct``).
         start: where the stylus is before the first stop (default: anywhere).
+        cost: what a travel costs (see :data:`Cost`; default its length): the order
+            minimises the sum.
 
     Returns:
         The order and its travel length, with the nearest-neighbour figures.
     """
     if not stops:
         return Tour((), 0.0, (), 0.0)
-    costs = cost_matrix(stops, clearance_z=clearance_z, direct=direct, start=start,
-                        route=route)
+    matrix = partial(cost_matrix, stops, clearance_z=clearance_z, direct=direct, start=start,
+                     route=route)
+    lengths = matrix()
+    costs = lengths if cost is None else matrix(cost=cost)
     nearest = nearest_neighbour(costs)
     best = improve(list(nearest), costs)
-    return Tour(tuple(k - 1 for k in best[1:]), tour_length(best, costs),
-                tuple(k - 1 for k in nearest[1:]), tour_length(nearest, costs))
+    return Tour(tuple(k - 1 for k in best[1:]), tour_length(best, lengths),
+                tuple(k - 1 for k in nearest[1:]), tour_length(nearest, lengths))

@@ -9,14 +9,16 @@ required clearance) and the path is rebuilt from what clears:
    is dropped (only that touch).
 2. *Legs*: between consecutive kept stations the planned moves (safe-circle
    transitions, axial links, and the safe points of dropped touches passed through);
-   when they do not clear, a lift to a local height (``LIFT_HEIGHTS`` above the higher
-   end) or to the clearance level; when nothing clears, the stations fall into
-   separate *runs*.
+   when they do not clear, or go by the clearance level (between arcs or sections that
+   do not reach each other), a lift over what is in the way (:meth:`Sweeper.lift`: up,
+   across at the lowest local height the collision check clears, down) or to the
+   clearance level; when nothing clears, the stations fall into separate *runs*.
 3. *Access*: a station can be entered or left straight along Z from the clearance
    level when that move clears.  A run is entered at its first station with access,
    goes back to its start, along to its end and back to its last station with access
    (out-and-back only where the ends lack access); a run with no access at all is
-   dropped.  Runs are joined at the clearance level.
+   dropped.  Runs are joined by a lift from the end of one to the start of the next
+   where one clears (:meth:`Sweeper.lift`), else at the clearance level.
 
 The result keeps every touch that can be made safe; :class:`RerouteError` (a
 ``CollisionError``) names the feature, the move and the obstacle face when none can.
@@ -25,20 +27,36 @@ Paths that cleared unchanged come back unchanged (byte-identical programs).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from itertools import pairwise
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from probegen.errors import CollisionError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import Obstacle, Stylus, describe, fmt, swept, touch_stop
-from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint
+from probegen.planning.collision import (
+    MESH_TOLERANCE,
+    MIN_STEP,
+    MeshObstacle,
+    Obstacle,
+    Stylus,
+    describe,
+    fmt,
+    swept,
+    touch_stop,
+)
+from probegen.planning.heightmap import FCL_SLACK, clear_segments, height_map
+from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint, path_length
 
+Vec3 = tuple[float, float, float]
 LIFT_HEIGHTS = (5.0, 15.0)
-"""Local lift heights tried between two stations, mm above the higher of the two,
-before the clearance level."""
+"""Lift heights tried, mm above the higher end of a link, after the local height (or
+instead of it when the obstacle has no mesh) and before the clearance level."""
+LIFT_STEP = 0.5
+"""Local heights are rounded up to this, mm (tidy coordinates in the program)."""
 
 
 class Sweeper:
@@ -55,6 +73,7 @@ class Sweeper:
         self.obstacle = obstacle
         self.stylus = Stylus(ball, probe.shank_diameter / 2.0, probe.length)
         self.required = machine.margin / 2.0
+        self.feeds = machine.feeds
 
     def move(self, a: ArrayLike, b: ArrayLike, *, touch: bool = False) -> str | None:
         """None when the straight move ``a → b`` (mm) clears, else what it runs into
@@ -68,12 +87,76 @@ class Sweeper:
         what = describe(self.obstacle, ball - q, shank - q, q, worst)
         return f"from {fmt(pa)} to {fmt(pb)}: {what}"
 
+    def refused(self, a: ArrayLike, b: ArrayLike) -> bool:
+        """True when the check certainly refuses the move ``a → b``: the ball swept along
+        it (a capsule) comes within ``required + MESH_TOLERANCE - MIN_STEP/2`` (less
+        fcl's slack) of the mesh, so a sample of the sweep lies closer than the check
+        accepts (a python-fcl collision test, far cheaper than the sweep it saves).
+        False when unsure."""
+        if not isinstance(self.obstacle, MeshObstacle):
+            return False
+        fcl = self.obstacle.fcl
+        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        length = float(np.linalg.norm(pb - pa))
+        radius = self.stylus.ball + self.required + MESH_TOLERANCE - MIN_STEP / 2 - FCL_SLACK
+        if length < 1e-9:
+            shape, rot = fcl.Sphere(radius), np.eye(3)
+        else:
+            shape = fcl.Capsule(radius, length)
+            rot = _onto((pb - pa) / length)
+        obj = fcl.CollisionObject(shape, fcl.Transform(rot, (pa + pb) / 2.0))
+        return bool(fcl.collide(obj, self.obstacle.part, fcl.CollisionRequest(),
+                                fcl.CollisionResult()))
+
     def path(self, points: Sequence[ArrayLike]) -> str | None:
-        """None when every move of the polyline clears, else the first collision."""
+        """None when every move of the polyline clears, else the first collision (the
+        height map's fast check first: :func:`probegen.planning.heightmap.clear_segments`,
+        then the exact sweeps)."""
+        ends = [np.asarray(p, dtype=np.float64) for p in points]
+        if clear_segments([list(pairwise(ends))], self.obstacle, self.stylus,
+                          self.required)[0]:
+            return None
         for a, b in zip(points[:-1], points[1:], strict=True):
             why = self.move(a, b)
             if why is not None:
                 return why
+        return None
+
+    def local_height(self, a: Vec3, b: Vec3) -> float | None:
+        """The lowest ball-centre height (mm) at which the stylus crosses from above
+        ``a`` to above ``b`` clear of the part by the required distance, from the part's
+        height map (an upper bound of the mesh within the ball's and shank's reach of
+        the segment in XY; :mod:`probegen.planning.heightmap`), rounded up to
+        :data:`LIFT_STEP`; None without a mesh or with nothing under the way."""
+        if not isinstance(self.obstacle, MeshObstacle):
+            return None
+        s = self.stylus
+        q = self.required + MESH_TOLERANCE + MIN_STEP / 2.0 + FCL_SLACK
+        pa, pb = np.array([a], dtype=np.float64), np.array([b], dtype=np.float64)
+        top = float(height_map(self.obstacle).highest_along(pa, pb, max(s.ball, s.shank) + q)[0])
+        if not math.isfinite(top):
+            return None
+        return math.ceil((top + s.ball + q) / LIFT_STEP) * LIFT_STEP
+
+    def lift(self, a: Vec3, b: Vec3, ceiling: float) -> tuple[Vec3, ...] | None:
+        """The points (``a`` and ``b`` included) of the lowest clear lift from ``a`` to
+        ``b`` below ``ceiling`` (mm): straight up, across, straight down, at the lowest
+        of the local height (:meth:`local_height`, an upper bound: the height map
+        counts a triangle over its whole XY box) and :data:`LIFT_HEIGHTS` above the
+        higher end that clears; None when none does.  A lift at the height of the
+        higher end is a single climb or descent and the move across."""
+        top = max(a[2], b[2])
+        local = self.local_height(a, b)
+        heights = {top + h for h in LIFT_HEIGHTS}
+        if local is not None:
+            heights = {z for z in heights if z < local} | {max(local, top)}
+        for z in sorted(heights):
+            if z >= ceiling:
+                break
+            points = lift_points(a, b, z)
+            if not any(self.refused(p, q) for p, q in pairwise(points)) and (
+                    self.path(points) is None):
+                return points
         return None
 
     def touch(self, contact: ArrayLike, normal: ArrayLike,
@@ -84,6 +167,22 @@ class Sweeper:
         r = self.stylus.ball
         return self.move(c + (r + approach) * n, touch_stop(c, n, r, self.required),
                          touch=True)
+
+
+def _onto(z: np.ndarray) -> np.ndarray:
+    """A rotation (columns x, y, z) taking +Z onto the unit vector ``z``."""
+    x = np.array([0.0, z[2], -z[1]]) if abs(z[0]) < 0.9 else np.array([-z[2], 0.0, z[0]])
+    x /= math.sqrt(float(x @ x))
+    y = np.array([z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2],
+                  z[0] * x[1] - z[1] * x[0]])
+    return np.column_stack([x, y, z])
+
+
+def lift_points(a: Vec3, b: Vec3, z: float) -> tuple[Vec3, ...]:
+    """``a``, above ``a`` at ``z``, above ``b`` at ``z``, ``b``; without the repeated
+    point where an end lies at ``z``."""
+    points = [a, (a[0], a[1], z), (b[0], b[1], z), b]
+    return tuple(p for k, p in enumerate(points) if k == 0 or p != points[k - 1])
 
 
 class RerouteError(CollisionError):
@@ -179,19 +278,24 @@ class _Router:
             planned += self.legs[k]
         sa, sb = self.stations[a].safe, self.stations[b].safe
         why = self.sweeper.path(self._positions([sa, *planned, sb]))
-        if why is None:
+        clear = self.plan.clear_z
+        if why is None and not any(p.kind is PathKind.CLEAR for p in planned):
             return planned, ""
-        top = max(sa.position[2], sb.position[2])
-        heights = [top + h for h in LIFT_HEIGHTS if top + h < self.plan.clear_z]
-        for z in [*heights, self.plan.clear_z]:
-            kind = PathKind.CLEAR if z == self.plan.clear_z else PathKind.LIFT
-            lift = [_at(sa, z, kind), _at(sb, z, kind)]
-            if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
-                if z != self.plan.clear_z:
-                    self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
-                                      f"z = {z:.3f}, the planned move {why}")
-                return lift, ""
-        return None, why
+        points = self.sweeper.lift(sa.position, sb.position, clear)
+        if why is None and (points is None or path_length(points) >= path_length(
+                self._positions([sa, *planned, sb]))):
+            return planned, ""
+        if points is not None:
+            lift = [PathPoint(PathKind.LIFT, q) for q in points[1:-1]]
+            self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
+                              f"z = {max(q[2] for q in points):.3f}, "
+                              + ("not by the clearance level" if why is None
+                                 else f"the planned move {why}"))
+            return lift, ""
+        lift = [_at(sa, clear, PathKind.CLEAR), _at(sb, clear, PathKind.CLEAR)]
+        if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
+            return lift, ""
+        return None, why or ""
 
 
 def _runs(router: _Router, kept: list[int]) -> list[list[tuple[int, list[PathPoint]]]]:
@@ -271,18 +375,22 @@ def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
     if not pieces:
         raise RerouteError(f"feature {plan.feature}: no touch can be reached safely: "
                            + "; ".join(router.notes))
-    safe = _assemble(plan, pieces)
+    safe = _assemble(plan, pieces, sweeper)
     return Rerouted(plan if safe.path == plan.path else safe, tuple(sorted(
         stations[k].safe.index for k in dropped)), tuple(router.notes))
 
 
-def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]]) -> FeaturePlan:
-    """Entry, the runs joined at the clearance level, exit; touches renumbered."""
+def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]],
+              sweeper: Sweeper) -> FeaturePlan:
+    """Entry, the runs joined by a lift or at the clearance level, exit; touches
+    renumbered."""
     z = plan.clear_z
     path: list[PathPoint] = [_at(pieces[0][0], z, PathKind.ENTRY)]
     for j, piece in enumerate(pieces):
         if j:
-            path += [_at(path[-1], z, PathKind.CLEAR), _at(piece[0], z, PathKind.CLEAR)]
+            lift = sweeper.lift(path[-1].position, piece[0].position, z)
+            path += ([PathPoint(PathKind.LIFT, q) for q in lift[1:-1]] if lift is not None
+                     else [_at(path[-1], z, PathKind.CLEAR), _at(piece[0], z, PathKind.CLEAR)])
         path += piece
     path.append(_at(path[-1], z, PathKind.EXIT))
     order = [p.index for p in path if p.kind is PathKind.TARGET]

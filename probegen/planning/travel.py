@@ -1,13 +1,20 @@
 """Travel between revolved features, and the figures of the whole tour.
 
 Between two features the stylus goes from the last safe point of one to the first safe
-point of the next.  :class:`Linker` offers, for the nearest few features only
-(:data:`NEIGHBOURS`), the straight move or a lift to a local height
-(:data:`probegen.planning.reroute.LIFT_HEIGHTS` above the higher end) when the collision
-check clears it; otherwise the order (:func:`probegen.planning.order.order_stops`)
-travels by the clearance plane: up, across, down.  :func:`linked_nodes` writes the
-chosen travel into the program: a feature reached by a link starts with the link's
-moves instead of the rapid above its entry and the descent.
+point of the next.  :class:`Linker` offers the straight move or a lift over what lies
+between (:meth:`probegen.planning.reroute.Sweeper.lift`: up to the lowest local height
+the collision check clears, across, down) when it is quicker than the clearance plane
+(:func:`travel_time`: every move below the clearance plane at the positioning feed, the
+move across the clearance plane at the rapid rate); otherwise the order
+(:func:`probegen.planning.order.order_stops`, on these times) travels by the clearance
+plane: up, across, down.  A link is looked for only where even the straight move would
+be quicker than the clearance plane.  :func:`linked_nodes` writes the chosen travel into
+the program: a feature reached by a link starts with the link's moves instead of the
+rapid above its entry and the descent.
+
+:func:`over_obstacles` does the same inside line and plane features: a move from one
+contact's start point to the next that the collision check refuses (a boss between them)
+becomes a lift over it.
 
 :func:`tour_figures` compares the whole tour (features and travel, from above the first
 feature's entry to above the last one's exit) with the common baseline (every touch
@@ -26,9 +33,9 @@ from itertools import pairwise
 from typing import Any
 
 from probegen import ir
-from probegen.machine.profile import MachineProfile
+from probegen.machine.profile import Feeds, MachineProfile
 from probegen.planning.order import Stop
-from probegen.planning.reroute import LIFT_HEIGHTS, Sweeper
+from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import (
     Comparison,
     Figures,
@@ -40,10 +47,23 @@ from probegen.planning.revolved import (
 from probegen.planning.revolved_spec import revolved_nodes
 
 Vec3 = tuple[float, float, float]
-NEIGHBOURS = 6
-"""Each feature is linked directly only to this many nearest features (by the straight
-distance from its exit to their entries): the others are far enough that the
-clearance plane costs little more, and checking every pair would cost n² sweeps."""
+
+
+def travel_time(points: Sequence[Vec3], clearance_z: float, feeds: Feeds) -> float:
+    """Nominal time (s) of a travel through ``points``: a level move at or above
+    ``clearance_z`` at the rapid rate, every other move at the positioning feed (as
+    :func:`linked_nodes` writes them; accelerations ignored)."""
+    minutes = 0.0
+    for p, q in pairwise(points):
+        level = p[2] == q[2] and p[2] >= clearance_z
+        minutes += math.dist(p, q) / (feeds.rapid if level else feeds.position)
+    return 60.0 * minutes
+
+
+def clearance_travel(a: Vec3, b: Vec3, clearance_z: float) -> tuple[Vec3, ...]:
+    """Up from ``a`` to the clearance plane, across, down to ``b``."""
+    z = max(clearance_z, a[2], b[2])
+    return (a, (a[0], a[1], z), (b[0], b[1], z), b)
 
 
 def stop_of(plan: Any) -> Stop:
@@ -54,38 +74,39 @@ def stop_of(plan: Any) -> Stop:
 
 
 class Linker:
-    """Clear links between the stops of one program (memoised)."""
+    """Clear links between the stops of one program, quicker than the clearance plane
+    (memoised).  ``stops`` is kept for the callers' sake: every pair may be linked."""
 
-    def __init__(self, sweeper: Sweeper, stops: Sequence[Stop], clearance_z: float) -> None:
+    def __init__(self, sweeper: Sweeper, stops: Sequence[Stop], clearance_z: float,
+                 feeds: Feeds | None = None) -> None:
         self.sweeper, self.clearance_z = sweeper, clearance_z
-        self.near: dict[Vec3, set[Vec3]] = {}
-        for a in stops:
-            others = sorted((math.dist(a.exit, b.entry), b.entry) for b in stops if b != a)
-            self.near[a.exit] = {e for _, e in others[:NEIGHBOURS]}
+        self.feeds = feeds if feeds is not None else sweeper.feeds
         self._memo: dict[tuple[Vec3, Vec3], tuple[Vec3, ...] | None] = {}
+
+    def time(self, points: Sequence[Vec3]) -> float:
+        """:func:`travel_time` of a travel of this program, s."""
+        return travel_time(points, self.clearance_z, self.feeds)
 
     def route(self, a: Vec3, b: Vec3) -> tuple[Vec3, ...] | None:
         """The points (``a`` and ``b`` included) of a clear link below the clearance
-        plane from exit ``a`` to entry ``b``, or None."""
-        if b not in self.near.get(a, ()):
-            return None
+        plane from exit ``a`` to entry ``b`` that is quicker than the clearance plane,
+        or None."""
         key = (a, b)
         if key not in self._memo:
             self._memo[key] = self._find(a, b)
         return self._memo[key]
 
     def _find(self, a: Vec3, b: Vec3) -> tuple[Vec3, ...] | None:
-        if self.sweeper.move(a, b) is None:
+        above = self.time(clearance_travel(a, b, self.clearance_z))
+        if self.time((a, b)) >= above:
+            return None  # no link below the clearance plane can be quicker
+        if not self.sweeper.refused(a, b) and self.sweeper.move(a, b) is None:
             return (a, b)
-        top = max(a[2], b[2])
-        for h in LIFT_HEIGHTS:
-            z = top + h
-            if z >= self.clearance_z:
-                break
-            points = (a, (a[0], a[1], z), (b[0], b[1], z), b)
-            if self.sweeper.path(points) is None:
-                return points
-        return None
+        # a lift at z is quicker than the clearance plane below this height
+        across = math.hypot(b[0] - a[0], b[1] - a[1])
+        ceiling = self.clearance_z - across * (1.0 - self.feeds.position / self.feeds.rapid) / 2
+        points = self.sweeper.lift(a, b, min(ceiling, self.clearance_z))
+        return points if points is not None and self.time(points) < above else None
 
 
 def linked_nodes(plans: Sequence[Any], machine: MachineProfile, clearance_z: float,
@@ -113,6 +134,44 @@ def linked_nodes(plans: Sequence[Any], machine: MachineProfile, clearance_z: flo
     if last is not None:
         out.append(last)
     return out
+
+
+def over_obstacles(nodes: Sequence[ir.Node], sweeper: Sweeper,
+                   clearance_z: float) -> list[ir.Node]:
+    """``nodes`` with every move of a line or plane feature from one contact's start
+    point to the next that the collision check refuses (a boss or a wall between them)
+    replaced by the lowest clear lift over it (:meth:`Sweeper.lift`), else by the
+    clearance plane.  Other nodes and moves that clear come back unchanged."""
+    out: list[ir.Node] = []
+    for node in nodes:
+        if isinstance(node, ir.FeatureBlock) and isinstance(node.feature,
+                                                             ir.PlaneDef | ir.LineDef):
+            node = replace(node, body=_over(node.body, sweeper, clearance_z))
+        out.append(node)
+    return out
+
+
+def _over(body: Sequence[ir.Node], sweeper: Sweeper, clearance_z: float) -> tuple[ir.Node, ...]:
+    """A planar block's body with its moves between contacts lifted where blocked."""
+    out: list[ir.Node] = []
+    pos: Vec3 | None = None
+    for k, node in enumerate(body):
+        if not isinstance(node, ir.Move) or any(isinstance(c, ir.Var) for c in node.target):
+            out.append(node)
+            continue
+        target: Vec3 = tuple(float(c) for c in node.target)  # type: ignore[assignment,arg-type]
+        after_touch = k > 0 and isinstance(body[k - 1], ir.Move) and (
+            body[k - 1].mode is ir.MoveMode.RETRACT)  # type: ignore[union-attr]
+        if (pos is not None and after_touch and node.mode is ir.MoveMode.PROTECTED
+                and target[2] < clearance_z
+                and sweeper.move(pos, target) is not None):
+            points = (sweeper.lift(pos, target, clearance_z)
+                      or clearance_travel(pos, target, clearance_z))
+            out += [ir.Move(q, ir.MoveMode.PROTECTED) for q in points[1:]]
+        else:
+            out.append(node)
+        pos = target
+    return tuple(out)
 
 
 def program_segments(nodes: Sequence[ir.Node], ball: float) -> tuple[Segment, ...]:
