@@ -298,20 +298,10 @@ def _plan(args: argparse.Namespace) -> int:
               "of orientation (the returns to the first stylus and the vertical included)")
     print(f"collision check: {len(planned.clearance.segments)} segments, smallest "
           f"clearance above the margin {planned.clearance.minimum:.3f} mm")
-    if args.all_revolved and not planned.revolved:
-        print(f"no revolved feature of {args.input} can be measured safely: the list below "
-              "says why")
     for r in planned.revolved:
         for line in r.notes:
             print(f"rerouted: {r.spec.id}: {line}")
-    if notes:
-        print(f"left out ({len(notes)} recognised features; the reason and what would make "
-              "each measurable):")
-        for note in notes:
-            print(f"  {note}")
-    if args.output:
-        _write_programs(args, spec, part, notes)
-    return ExitCode.OK
+    return _left_out_and_write(args, spec, part, notes, bool(planned.revolved))
 
 
 def _plan_setups(args: argparse.Namespace, spec: Any, part: Part | None,
@@ -337,7 +327,15 @@ def _plan_setups(args: argparse.Namespace, spec: Any, part: Part | None,
               f"{p.orientation_changes} of orientation; collision check: "
               f"{len(p.clearance.segments)} segments, smallest clearance above the margin "
               f"{p.clearance.minimum:.3f} mm")
-    if args.all_revolved and not revolved:
+    return _left_out_and_write(args, spec, part, notes, bool(revolved))
+
+
+def _left_out_and_write(args: argparse.Namespace, spec: Any, part: Part | None,
+                        notes: tuple[str, ...], any_revolved: bool) -> int:
+    """The end of ``plan``'s report: that nothing could be measured (``--all-revolved``
+    without a revolved feature planned), the features left out with their reasons; with
+    ``-o`` the programs."""
+    if args.all_revolved and not any_revolved:
         print(f"no revolved feature of {args.input} can be measured safely: the list below "
               "says why")
     if notes:
