@@ -16,10 +16,9 @@ from conftest import REPO
 from probegen.results import parse_dprnt
 
 PROGRAMS = sorted(p for p in (REPO / "tests" / "golden").glob("*/*.nc")
-                  if p.parent.name not in ("macros", "split"))
-"""The golden inline programs (the macro library and the compact program that calls it:
-tests/test_macro_library.py, which runs them against the inline form; a split program's
-driver and part: tests/test_program_limits.py, which runs them against the unsplit one)."""
+                  if p.parent.name not in ("macros", "split", "orient", "setups"))
+"""The golden inline programs (as tests/test_macrob.py ``GOLDENS``: the library, compact,
+split, hand-made orientation and setup programs are run by their own tests)."""
 VAR = re.compile(r"#(\d+)\[(\d)(\d)\]")
 
 

@@ -34,10 +34,13 @@ DATA = TESTS / "data" / "macrob"
 REF = Path(__file__).resolve().parents[2] / "shared" / "ref" / "macro-b"
 REF_FILES = tuple(sorted(REF.glob("*.NC")))
 GOLDENS = tuple(sorted(p for p in (TESTS / "golden").glob("*/*.nc")
-                       if p.parent.name not in ("macros", "split")))
+                       if p.parent.name not in ("macros", "split", "orient", "setups")))
 """The golden inline programs (the macro library and the compact program that calls it:
 tests/test_macro_library.py, which runs them against the inline form; a split program's
-driver and part: tests/test_program_limits.py, which runs them against the unsplit one)."""
+driver and part: tests/test_program_limits.py, which runs them against the unsplit one;
+the hand-made orientation and stylus-change programs, short and compact:
+tests/test_orient_dialects.py; the setup programs, compact: tests/test_setups.py, which
+runs them on the virtual machine)."""
 HAAS = control_settings("haas")
 """Haas goldens cancel mirror imaging with G100 where Fanuc writes G50.1."""
 

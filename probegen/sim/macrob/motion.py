@@ -523,10 +523,12 @@ class Motion:
         self.work = self.to_work(self.position)
 
     def table_words(self, addr: dict[str, tuple[float, bool]]) -> bool:
-        """Whether a G53 block turns the trunnion table (a machine with ``tilt``: its
-        tilt axis or C named)."""
-        return getattr(self.machine, "tilt", None) is not None and any(
-            a in addr for a in (self.settings.tilt_axis, "C"))
+        """Whether a G53 block turns the trunnion table: a machine with ``tilt`` and no
+        B/C head, the tilt axis named (with or without C)."""
+        if getattr(self.machine, "tilt", None) is None or getattr(self.machine, "rotary",
+                                                                    False):
+            return False  # no table, or the B/C head machine (its B and C: ``turn``)
+        return self.settings.tilt_axis in addr  # C alone: the rotary axes' own G53
 
     def table_move(self, addr: dict[str, tuple[float, bool]]) -> None:
         """``G53 A.. C..`` (or ``B.. C..``): turn the trunnion table to machine angles,
