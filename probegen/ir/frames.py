@@ -64,6 +64,17 @@ def frame_for(axis: ir.Vec3) -> Rotation:
                  for i in range(3))
 
 
+def head_approach(a: float, b: float) -> ir.Vec3:
+    """The approach direction (from the ball towards the head: an ``Orient``'s frame +Z)
+    of a CMM head at angles ``A``, ``B`` (deg): ``A`` tilts the stylus from straight down,
+    ``B`` turns it counter-clockwise seen from above, ``B = 0`` pointing the stylus to -Y:
+    ``(-sin A·sin B, sin A·cos B, cos A)``.  The stylus direction (head to ball) is its
+    negative.  The one convention of the planner, the DMIS dialect and the virtual CMM."""
+    sa, ca = math.sin(math.radians(a)), math.cos(math.radians(a))
+    sb, cb = math.sin(math.radians(b)), math.cos(math.radians(b))
+    return (-sa * sb, sa * cb, ca)
+
+
 def is_identity(rotation: Rotation, tol: float = 1e-12) -> bool:
     """Whether ``rotation`` is the vertical probe's."""
     return all(abs(rotation[i][j] - IDENTITY[i][j]) <= tol for i in range(3) for j in range(3))

@@ -17,7 +17,8 @@ import re
 from typing import TYPE_CHECKING, Any
 
 from probegen import ir
-from probegen.machine.profile import MachineProfile, Stylus
+from probegen.machine.profile import MachineProfile
+from probegen.planning.styli import smallest_stylus
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -68,12 +69,6 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
     if reasons:
         return f"{head}: {'; '.join(reasons)}"
     return f"{head}: {_planning_reason(f, part, machine, problem, least)}"
-
-
-def smallest_stylus(machine: MachineProfile) -> Stylus:
-    """The stylus of the profile with the smallest ball (the first of equals)."""
-    styli = machine.styli()
-    return min(styli, key=lambda s: s.ball_diameter)
 
 
 def _smallest_text(machine: MachineProfile) -> str:

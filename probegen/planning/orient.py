@@ -95,10 +95,8 @@ def head_angles(a: ir.Vec3) -> tuple[float, float]:
 
 def head_direction(big_a: float, big_b: float) -> ir.Vec3:
     """The approach direction of head angles ``A``, ``B`` (deg): the inverse of
-    :func:`head_angles`."""
-    sa, ca = math.sin(math.radians(big_a)), math.cos(math.radians(big_a))
-    sb, cb = math.sin(math.radians(big_b)), math.cos(math.radians(big_b))
-    return (-sa * sb, sa * cb, ca)
+    :func:`head_angles` (:func:`probegen.ir.frames.head_approach`)."""
+    return frames.head_approach(big_a, big_b)
 
 
 def _on_grid(value: float, step: float) -> float | None:

@@ -55,7 +55,8 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
     line for each one left out with the reason
     (:func:`probegen.planning.left_out.revolved_left_out`)."""
     from probegen.cad.revolved import revolved_features
-    from probegen.planning.left_out import revolved_left_out, smallest_stylus
+    from probegen.planning.left_out import revolved_left_out
+    from probegen.planning.styli import smallest_stylus
 
     out: list[RevolvedSpec] = []
     notes: list[str] = []

@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 
 from probegen.dmis.reader import Label, Param, Statement, format_param
+from probegen.ir.frames import head_approach
 from probegen.sim.cmm.state import ForeignSensor, NotExecutable, SkipWithNote, VmState
 
 SENSOR_MATCH = 1e-4
@@ -120,9 +121,8 @@ Axis = tuple[tuple[float, float, float], tuple[float, float] | None]
 def head_direction(a: float, b: float) -> tuple[float, float, float]:
     """The stylus direction (head to ball, unit) at head angles ``A``, ``B`` (deg), see
     the module docstring."""
-    sa, ca = math.sin(math.radians(a)), math.cos(math.radians(a))
-    sb, cb = math.sin(math.radians(b)), math.cos(math.radians(b))
-    return (sa * sb + 0.0, -sa * cb + 0.0, -ca + 0.0)
+    x, y, z = head_approach(a, b)  # the approach is from the ball towards the head
+    return (-x + 0.0, -y + 0.0, -z + 0.0)
 
 
 def _stylus_axis(state: VmState, params: tuple[Param, ...]) -> Axis | None:
