@@ -166,3 +166,16 @@ def test_any_program_numbers_value_is_a_range_or_a_spec_error(tmp_path_factory: 
             assert inside
         except SpecError:
             assert not inside
+
+
+def test_linuxcnc_library_subroutines_take_no_program_number(tmp_path: Path) -> None:
+    """LinuxCNC's library is named subroutine files: a program range that leaves out
+    ``library_number`` still compiles the compact form, and writes the files; on Fanuc the
+    same range is refused (test_the_library_needs_a_number_in_the_range)."""
+    spec = write_spec(tmp_path, 100, "program_numbers = [1, 999]", dialect="linuxcnc")
+    argv = ["compile", str(spec), "-d", "linuxcnc", "--compact", "-o", str(tmp_path / "out"),
+            "-q"]
+    assert main(argv) == ExitCode.OK
+    names = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert "spec.ngc" in names and len(names) > 1
+    assert all(n == "spec.ngc" or n.endswith(".ngc") for n in names)

@@ -163,7 +163,8 @@ def write_parts(target: Path, fitted: Any, written: dict[Path, str]) -> None:
 
 def checked_library(dialect: Any, machine: Any) -> dict[str, str]:
     """The macro library files ``dialect`` writes for ``machine`` (a profile), each
-    program number checked against its ``[controller] program_numbers``.
+    program number checked against its ``[controller] program_numbers`` where the
+    library's subprograms are numbered (``dialect.NUMBERED_LIBRARY``).
 
     Raises:
         UnsupportedError: the dialect has no library.
@@ -172,7 +173,8 @@ def checked_library(dialect: Any, machine: Any) -> dict[str, str]:
     c = machine.controller
     files: dict[str, str] = dialect.library_files(c.library_number, c.variable_base,
                                                   machine.units, c.options)
-    for number in range(c.library_number, c.library_number + len(files)):
+    numbers = range(c.library_number, c.library_number + len(files))
+    for number in numbers if dialect.NUMBERED_LIBRARY else ():
         machine.check_program_number(
             number, f"{machine.source}: controller.library_number (O{number})")
     return files

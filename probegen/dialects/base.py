@@ -69,6 +69,10 @@ class Dialect:
     MACRO_LIBRARY: ClassVar[bool] = False
     """Whether the dialect has a subprogram library a compact program calls
     (:meth:`library_files`; ``compact`` selects that form)."""
+    NUMBERED_LIBRARY: ClassVar[bool] = True
+    """Whether the library's subprograms are numbered programs (``O8000``...: Fanuc, Haas),
+    each number then checked against ``[controller] program_numbers``; LinuxCNC's are
+    named subroutine files (``o<name> sub``), which take no program number."""
     COMPACT_DEFAULT: ClassVar[bool] = False
     """Whether ``compile`` writes the compact form unless ``--inline`` is given (Fanuc and
     Haas; LinuxCNC's library is opt-in with ``--compact``)."""

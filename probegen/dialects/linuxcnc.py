@@ -131,6 +131,7 @@ class LinuxCnc(Dialect):
     """Decimals of F words, by program units."""
 
     MACRO_LIBRARY: ClassVar[bool] = True
+    NUMBERED_LIBRARY: ClassVar[bool] = False
 
     def __init__(self) -> None:
         super().__init__()
