@@ -251,6 +251,21 @@ def note_input(path: str | os.PathLike[str]) -> None:
         _PROTECTED.add(Path(path).resolve())
 
 
+@contextlib.contextmanager
+def updating(path: str | os.PathLike[str]) -> Iterator[None]:
+    """Read the output file ``path`` to update it (a calibration file taking another
+    stylus's entry): what is read meanwhile from it is not noted as an input, so the
+    command may write it; a file already protected (on the command's line, or read as
+    an input before) stays protected."""
+    key = Path(path).resolve()
+    was = key in _PROTECTED
+    try:
+        yield
+    finally:
+        if not was:
+            _PROTECTED.discard(key)
+
+
 def output_folder(path: str | os.PathLike[str], what: str) -> Path:
     """Make sure ``path`` is a folder ``what`` can be written into (created with its
     parents); return it.

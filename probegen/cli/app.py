@@ -556,9 +556,11 @@ _OUTPUT_OPTIONS = frozenset({"output", "out", "write_calibration", "compensation
 
 
 def _inputs(args: argparse.Namespace) -> list[str]:
-    """The file names a command reads: every string argument but its outputs."""
-    return [v for k, v in vars(args).items()
-            if isinstance(v, str) and k not in _OUTPUT_OPTIONS and v not in ("", "-")]
+    """The file names a command reads: every string argument but its outputs, and every
+    string of a list argument (``ingest LOG [LOG ...]``)."""
+    values = [w for k, v in vars(args).items() if k not in _OUTPUT_OPTIONS
+              for w in (v if isinstance(v, list) else [v])]
+    return [v for v in values if isinstance(v, str) and v not in ("", "-")]
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,

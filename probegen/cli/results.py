@@ -10,11 +10,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from probegen.errors import ExitCode, ProbegenError, ResultsParseError
-from probegen.files import read_input, write_file
+from probegen.files import read_input, updating, write_file
 
 if TYPE_CHECKING:
     from probegen.evaluate.ingest import Ingested
     from probegen.evaluate.run_identity import IdentityOptions
+    from probegen.machine.calibration import ProbeCalibration
     from probegen.spc.series import Series
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
@@ -60,7 +61,7 @@ def _ingest(args: argparse.Namespace) -> int:
     from probegen.evaluate.ingest import identified
     from probegen.evaluate.outputs import to_table, write_outputs
     from probegen.evaluate.setups import ingest_setups
-    from probegen.machine.calibration import calibration_toml, check_date, load_calibration
+    from probegen.machine.calibration import check_date, load_calibration
     from probegen.spec.model import load_spec
 
     spec = load_spec(args.spec)
@@ -101,14 +102,38 @@ def _ingest(args: argparse.Namespace) -> int:
                                 f"found {'none' if not skipped else 'only NOT EVALUATED '}"
                                 f"{', '.join(skipped)}")
         refuse_incomplete_calibration(result)
-        written = result.results[0].calibration(str(args.log[0]), date)
-        target = write_file(args.write_calibration, calibration_toml(written),
-                            "the probe calibration")
+        target, written = write_calibration(Path(args.write_calibration), tuple(
+            r.calibration(str(args.log[0]), date) for r in result.results))
         print(f"wrote the probe calibration {target} ({written.fingerprint}"
               f"{'' if date else ', undated: give --calibration-date'})")
     if args.store:
         store_run(result, args.store)
     return verdict_code(result.status)
+
+
+def write_calibration(target: Path, entries: tuple[ProbeCalibration, ...]
+                      ) -> tuple[Path, ProbeCalibration]:
+    """Write the sphere tests' calibration ``entries`` to ``target``, over the entries of
+    other styli an existing calibration file there holds
+    (:func:`probegen.machine.calibration.combined`); say which were kept."""
+    from probegen.machine.calibration import calibration_toml, combined, load_calibration
+
+    old = None
+    if target.is_file():
+        try:
+            with updating(target):
+                old = load_calibration(target)
+        except ProbegenError:
+            old = None  # not a calibration file: replaced, as it always was
+    written, kept = combined(entries, old, "--write-calibration")
+    path = write_file(target, calibration_toml(written), "the probe calibration")
+    if kept:
+        print(f"kept the entries of {', '.join(_pair(e) for e in kept)} from {target}")
+    return path, written
+
+
+def _pair(entry: ProbeCalibration) -> str:
+    return f"{entry.stylus} {entry.orientation or 'vertical'}"
 
 
 def store_run(result: Ingested, url: str) -> None:

@@ -21,7 +21,8 @@ Conventions (see ``docs/dialects.md``):
   and the moves around an orientation change are the IR's ``GOTO``s.  One sensor is
   declared in the header per stylus and head orientation the program uses:
   ``S(<label>)=SNSDEF/PROBE,INDEX,POL,a,b,0,0,-1,<length>,<ball>``, the start stylus at
-  A0 B0 keeping its ``PRB<tool>`` label, every other ``<stylus>_A<a>B<b>`` (``-`` written
+  A0 B0 keeping its own label (its rack label, ``ir.Setup.stylus``; ``PRB<tool>`` for a
+  probe without a rack), every other ``<stylus>_A<a>B<b>`` (``-`` written
   ``M``, a decimal point ``P``: ``D2_A90BM90``).  Each ``Orient`` and ``SelectStylus``
   selects the sensor of the stylus and head angles then in force: ``SNSLCT/S(...)``.
   ``a`` and ``b`` are the head angles the ``Orient`` carries (``ir.Orient.head``),
@@ -100,7 +101,8 @@ class Dmis(Dialect):
         final = (ir.SetWorkOffset, ir.Align, ir.UpdateTool)
         self.directions = {n.feature: n.direction for n in program.body
                            if isinstance(n, ir.Check) and n.fit == "line"}
-        self.start = Sensor(f"PRB{s.tool_number}", s.probe_length, s.ball_diameter)
+        self.start = Sensor(s.stylus or f"PRB{s.tool_number}", s.probe_length,
+                            s.ball_diameter)
         self.sensors: dict[str, dict[str, str]] = {}
         self.stylus, self.head = self.start, (0.0, 0.0)
         self.sensor_label()
@@ -112,7 +114,8 @@ class Dmis(Dialect):
         if frame:
             body.append({"kind": "lines", "lines": frame})
         local = any(isinstance(n, ir.LocalFrame) for n in ir.walk(program.body))
-        return {"s": s, "units": self.UNITS_WORD[s.units], "body": body, "frames": local,
+        return {"s": s, "start": self.start.label, "units": self.UNITS_WORD[s.units],
+                "body": body, "frames": local,
                 "sensors": list(self.sensors.values()),
                 "posvel": self.feed(s.position_feed), "mesvel": self.feed(s.probe_feed)}
 
@@ -135,7 +138,7 @@ class Dmis(Dialect):
 
     def sensor_label(self) -> str:
         """The label of the sensor for the stylus and head angles in force, declared on
-        first use (the start stylus at A0 B0 is ``PRB<tool>``, module docstring)."""
+        first use (the start stylus at A0 B0 keeps its own label, module docstring)."""
         a, b = self.head
         st = self.stylus
         label = st.label if st == self.start and a == 0.0 and b == 0.0 else \
@@ -174,8 +177,7 @@ class Dmis(Dialect):
     def select_stylus(self, node: ir.SelectStylus) -> dict[str, Any]:
         """Another stylus of the rack, at the head angles in force."""
         start = self.start
-        same = (node.tool_number, node.ball_diameter) == (
-            self.limits.tool_number if self.limits else -1, start.ball)
+        same = node.label == start.label
         self.stylus = start if same else Sensor(node.label, node.length, node.ball_diameter)
         return self.select(f"STYLUS {node.label}")
 

@@ -53,7 +53,13 @@ from probegen.evaluate.sphere_test import SphereTestResult, evaluate_sphere_test
 from probegen.geometry.fits_solver import vec3
 from probegen.geometry.uncertainty import Budget, few_dof_note
 from probegen.ir import frames
-from probegen.machine.calibration import ProbeCalibration, calibration_state, compensate, for_stylus
+from probegen.machine.calibration import (
+    ProbeCalibration,
+    calibration_state,
+    compensate,
+    for_stylus,
+    stylus_calibration,
+)
 from probegen.results import DmisOutput, DprntLog, read_dmis_output
 from probegen.results.dprnt import log_lines, parse_dprnt, read_raw
 from probegen.results.logcheck import check_log, ranges
@@ -355,11 +361,17 @@ def _upper(limit: float | None) -> tuple[float | None, float | None] | None:
 def _sphere_test(feature: SphereTest, spec: Spec, part: Part | None, touches: Touches,
                  notes: list[str], gaps: _Gaps, calibration: ProbeCalibration | None,
                  budget: Budget) -> Outcome:
-    """Evaluate a sphere test (method M1) from its touches."""
-    from probegen.planning.sphere_test import plan_points, resolve_sphere
+    """Evaluate a sphere test (method M1) from its touches, with the stylus it names
+    (its ball; its entry of ``calibration``)."""
+    from probegen.planning.sphere_test import plan_points, resolve_sphere, sphere_test_profile
 
+    machine = sphere_test_profile(feature, spec.machine)
+    stylus = machine.stylus.label if machine.rack else ""
+    if machine is not spec.machine and calibration is not None:
+        calibration = stylus_calibration(calibration, stylus, machine.probe.ball_radius, "",
+                                         feature.where)
     sphere = resolve_sphere(feature, part)
-    plan = plan_points(feature, sphere, spec.machine)
+    plan = plan_points(feature, sphere, machine)
     planned = range(1, len(plan.directions) + 1)
     found = [k for k in planned if (feature.id, k) in touches]
     missing = sorted(set(planned) - set(found))
@@ -375,13 +387,14 @@ def _sphere_test(feature: SphereTest, spec: Spec, part: Part | None, touches: To
         normals = np.array([plan.directions[k - 1] for k in found])
         # One radius, not the map: the sphere test measures the map (P_FTU, the radii
         # by direction); compensating it with the map would hide what it measures.
-        r = spec.machine.probe.ball_radius if calibration is None else \
+        r = machine.probe.ball_radius if calibration is None else \
             calibration.effective_radius
-        return evaluate_sphere_test(
+        result = evaluate_sphere_test(
             feature.id, compensate(centres, normals, r), normals,
             nominal_centre=sphere.centre, calibrated_diameter=sphere.diameter,
-            ball_radius=r, nominal_radius=spec.machine.probe.ball_radius,
+            ball_radius=r, nominal_radius=machine.probe.ball_radius,
             form=tol.form, size=tol.size, position=tol.position, budget=budget)
+        return replace(result, stylus=stylus)
 
     if len(found) < MIN_POINTS:
         notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches "

@@ -46,6 +46,8 @@ class SphereTestResult:
         radii: effective radius in each direction, mm.
         characteristics: the checked quantities.
         nominal_radius: the stylus's nominal ball radius, mm (0: ``ball_radius``).
+        stylus: the label of the rack's stylus the test was run with, or "" (a profile
+            without a rack): the calibration it gives is that stylus's entry.
     """
 
     feature: str
@@ -61,6 +63,7 @@ class SphereTestResult:
     radii: tuple[float, ...]
     characteristics: tuple[Characteristic, ...]
     nominal_radius: float = 0.0
+    stylus: str = ""
 
     @property
     def ok(self) -> bool | None:
@@ -73,7 +76,7 @@ class SphereTestResult:
         u = next((c.u for c in self.characteristics if c.name == "R_EFF"), None)
         return ProbeCalibration(self.nominal_radius or self.ball_radius,
                                 self.effective_radius, self.directions, self.radii, source,
-                                u or 0.0, date)
+                                u or 0.0, date, stylus=self.stylus)
 
 
 def evaluate_sphere_test(feature: str, points: ArrayLike, directions: ArrayLike, *,

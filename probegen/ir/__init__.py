@@ -100,6 +100,8 @@ class Setup:
         limits_source: where the limits come from, for messages (the profile path).
         library_number: O number of the first subprogram of the macro library a compact
             Macro B program calls (``[controller] library_number``).
+        stylus: the rack's label of the stylus the program starts with (the ``[probe]``
+            stylus; a CMM's sensor label), or "" for a probe without a rack.
     """
 
     program_number: int
@@ -129,6 +131,7 @@ class Setup:
     program_size: int = 0
     common_variables: tuple[tuple[int, int], ...] = ()
     alarm_text_length: int = 0
+    stylus: str = ""
 
 
 @dataclass(frozen=True, slots=True)

@@ -416,6 +416,41 @@ def _radii(t: Table, value: object) -> tuple[float, ...]:
     return tuple(float(c) for c in value)
 
 
+def combined(new: tuple[ProbeCalibration, ...], old: ProbeCalibration | None = None,
+             where: str = "") -> tuple[ProbeCalibration, tuple[ProbeCalibration, ...]]:
+    """The calibration of the entries ``new`` (one per sphere test of a run) written over
+    the file ``old`` (None: no file yet), and the entries of ``old`` it keeps.
+
+    An entry of a stylus (and orientation) replaces the old one of the same pair; the
+    old file's other entries are kept when every one of them names its stylus (a file
+    of the rack, written by this function or by hand).  A file of one unnamed entry (a
+    probe without a rack), or one new unnamed entry, is replaced whole, as it always was.
+
+    Raises:
+        SpecError: ``new`` is empty, holds two entries of one stylus and orientation, or
+            several of which one names no stylus; names ``where``.
+    """
+    if not new:
+        raise SpecError(f"{where}: expected at least one sphere test's calibration, found none")
+    keys = [(e.stylus, True if _vertical(e.orientation) else e.orientation) for e in new]
+    if len(new) > 1 and not all(e.stylus for e in new):
+        raise SpecError(f"{where}: expected every sphere test of a run that calibrates "
+                        "several styli to name its stylus (stylus = \"D2\"), found one "
+                        "without")
+    if len(set(keys)) < len(keys):
+        twice = sorted({k[0] or "unnamed" for k in keys if keys.count(k) > 1})
+        raise SpecError(f"{where}: expected one sphere test per stylus and orientation, "
+                        f"found several of stylus {', '.join(twice)}")
+    kept: tuple[ProbeCalibration, ...] = ()
+    if old is not None and all(e.stylus for e in new) and all(e.stylus for e in old.entries):
+        kept = tuple(e for e in old.entries
+                     if (e.stylus, True if _vertical(e.orientation) else e.orientation)
+                     not in keys)
+    every = sorted((*new, *kept), key=lambda e: (e.stylus, e.orientation))
+    first = replace(every[0], others=tuple(replace(e, others=()) for e in every[1:]))
+    return first, kept
+
+
 def calibration_toml(cal: ProbeCalibration) -> str:
     """The calibration as TOML text (fixed decimals, repeatable): ``[calibration]`` for a
     file of one entry, ``[[calibration]]`` entries sorted by stylus and orientation for

@@ -27,7 +27,7 @@ from probegen.planning.collision import ClearanceReport, Obstacle, check_program
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
 from probegen.planning.identity import program_identity
 from probegen.planning.order import Stop, Tour, order_stops
-from probegen.planning.orient import needs_index
+from probegen.planning.orient import needs_index, select_node, top_of
 from probegen.planning.oriented import (
     OrientedPlan,
     grouped_nodes,
@@ -40,7 +40,13 @@ from probegen.planning.revolved import Comparison
 from probegen.planning.revolved_metrics import Figures
 from probegen.planning.revolved_spec import RevolvedPlan
 from probegen.planning.setup import calibration_header, make_setup, part_of, setup_for
-from probegen.planning.sphere_test import SphereTestPlan, plan_points, resolve_sphere
+from probegen.planning.sphere_test import (
+    SphereTestPlan,
+    plan_points,
+    resolve_sphere,
+    sphere_test_profile,
+)
+from probegen.planning.styli import profile_with
 from probegen.planning.travel import (
     Linker,
     linked_nodes,
@@ -49,7 +55,7 @@ from probegen.planning.travel import (
     tour_figures,
 )
 from probegen.spec.actions import PlanarSpec
-from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec
+from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec, SphereTest
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -140,17 +146,7 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
                 body.append(check)
                 checked.append((feature, check))
         else:
-            sphere = resolve_sphere(feature, part)
-            p = plan_points(feature, sphere, machine)
-            plans.append(p)
-            offset = sphere_offset(feature, sphere.centre, machine.work_offset)
-            spheres += [offset] if offset is not None else []
-            if not feature.locate:
-                body += locate.measure_nominal(p, machine, spec.clearance_z)
-            elif runtime_variables:
-                body += locate.locate_runtime(p, machine, spec.clearance_z)
-            else:
-                body += locate.locate_frame(p, machine, spec.clearance_z)
+            body += _sphere_test(feature, part, spec, runtime_variables, plans, spheres)
         if progress is not None:
             progress(1)
     tour = figures = None
@@ -178,16 +174,40 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         freeform = [freeform[k] for k in order]
         body += [n for f in freeform for n in f.nodes]
     body += final_actions(checked, setup.work_offset, spheres)
-    if part is not None and any(needs_index(n, machine) for n in body):
-        body = list(with_index_moves(body, part, machine, machine.stylus))
+    top = top_of(part, plans)
+    if top is not None and any(needs_index(n, machine) for n in body):
+        body = list(with_index_moves(body, top, machine, machine.stylus))
     program = ir.Program(setup, tuple(body))
     program = ir.Program(replace(setup, identity=program_identity(program)), program.body)
-    report = (check_program(program, obstacle, plans, machine, progress=progress, part=part)
+    report = (check_program(program, obstacle, plans, machine, progress=progress, part=part,
+                           top=top)
               if check_collisions else ClearanceReport(()))
     return PlannedProgram(program, tuple(plans), report, tuple(revolved), tour, figures,
                           tuple(freeform), grouped.plans if grouped else (),
                           grouped.stylus_changes if grouped else 0,
                           grouped.orientation_changes if grouped else 0)
+
+
+def _sphere_test(feature: SphereTest, part: Part | None, spec: Spec, runtime_variables: bool,
+                 plans: list[SphereTestPlan], spheres: list[ir.SetWorkOffset]) -> list[ir.Node]:
+    """A sphere test's nodes (recording its plan in ``plans`` and its work offset in
+    ``spheres``); one that names a stylus of the rack takes it before and the ``[probe]``
+    stylus back after (:func:`probegen.planning.sphere_test.sphere_test_profile`)."""
+    machine = sphere_test_profile(feature, spec.machine)
+    sphere = resolve_sphere(feature, part)
+    p = plan_points(feature, sphere, machine)
+    plans.append(p)
+    offset = sphere_offset(feature, sphere.centre, machine.work_offset)
+    spheres += [offset] if offset is not None else []
+    if not feature.locate:
+        nodes = locate.measure_nominal(p, machine, spec.clearance_z)
+    elif runtime_variables:
+        nodes = locate.locate_runtime(p, machine, spec.clearance_z)
+    else:
+        nodes = locate.locate_frame(p, machine, spec.clearance_z)
+    if machine is spec.machine:
+        return list(nodes)
+    return [select_node(machine.stylus), *nodes, select_node(spec.machine.stylus)]
 
 
 def _tour(members: Sequence[OrientedPlan], machine: MachineProfile,
@@ -200,7 +220,7 @@ def _tour(members: Sequence[OrientedPlan], machine: MachineProfile,
     figures.  ``obstacle``: the part's (the identity group's, built with the spheres),
     else the turned part's."""
     first = members[0]
-    m = machine if first.stylus == machine.stylus else machine.with_stylus(first.stylus)
+    m = profile_with(machine, first.stylus)
     clear = first.clearance_z
     if obstacle is None:
         obstacle = obstacle_for(first.part, [])

@@ -333,7 +333,7 @@ class _Walker:
 def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                   machine: MachineProfile, *,
                   progress: Callable[[int], None] | None = None,
-                  part: Part | None = None) -> ClearanceReport:
+                  part: Part | None = None, top: float | None = None) -> ClearanceReport:
     """Check every move of ``program``; raise ``CollisionError`` at the first bad one.
 
     ``plans`` are the located features: :class:`Located` records or sphere-test plans
@@ -348,7 +348,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     first move after it to stay there (:func:`probegen.planning.orient.first_after`,
     ``PlanningError``): the route is the program's own moves, checked as every move is;
     nothing is assumed.  Any other stylus change is taken at the clearance level or
-    above.
+    above.  ``top``: the work Z of the part's top for the index height
+    (:func:`probegen.planning.orient.top_of`; default ``part``'s).
     """
     setup = program.setup
     r = setup.ball_diameter / 2.0
@@ -388,13 +389,15 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
         if progress is not None:
             progress(1)
         if isinstance(node, ir.Orient | ir.SelectStylus) and needs_index(node, machine):
-            if part is None:
+            if top is None and part is not None:
+                top = float(part.bbox_max[2])
+            if top is None or part is None and isinstance(node, ir.Orient):
                 raise PlanningError(f"{change_name(node)}: the check of a change taken at the "
                                     "index height needs the part model, found none")
             before = stylus
             if isinstance(node, ir.SelectStylus):
                 stylus = _stylus_of(node)
-            height = max(index_height(part, s.length, s.ball, machine)
+            height = max(index_height(top, s.length, s.ball, machine)
                          for s in (before, stylus))
             here = None if pos is None else to_work(frame, pos)
             if here is None or here[2] < height - LEVEL_SLACK:
@@ -402,6 +405,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 raise CollisionError(f"{change_name(node)}: the probe stands at {found}, expected "
                                      f"the index height {height:.3f} or above")
             if isinstance(node, ir.Orient):
+                assert part is not None
                 obstacle = obstacle_for(part.turned(node.rotation), [])
                 inside, outside, frame = getattr(obstacle, "inside", None), set(), node
                 pos = to_frame(frame, here)
@@ -432,8 +436,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                                         f"start of its touch, found {fmt(target)}")
             else:
                 if entering is not None:
-                    assert part is not None
-                    first_after(entering, frame, target, part, stylus, machine, clear)
+                    assert top is not None
+                    first_after(entering, frame, target, part, top, stylus, machine, clear)
                 if pos is not None:
                     check(pos, target, pos_extra, extra, node.mode.value)
             entering = None

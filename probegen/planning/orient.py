@@ -251,13 +251,26 @@ def to_work(frame: ir.Orient | None, p: np.ndarray) -> np.ndarray:
     return np.asarray(frames.to_work(frame, (float(p[0]), float(p[1]), float(p[2]))))
 
 
-def index_height(part: Part, length: float, ball: float, machine: MachineProfile) -> float:
+def index_height(top: float, length: float, ball: float, machine: MachineProfile) -> float:
     """The work Z where the probe changes orientation (or, on a CMM with a head, takes
-    another stylus), mm: the part's top plus the whole stylus (``length`` and ``ball``
-    radius, mm), the head's body on a CMM and the margin, so that the stylus clears the
-    part's bounding box in every direction it turns to."""
+    another stylus), mm: the top of what stands on the table (``top``, work Z: the
+    part's, :func:`top_of`) plus the whole stylus (``length`` and ``ball`` radius, mm),
+    the head's body on a CMM and the margin, so that the stylus clears the part's
+    bounding box in every direction it turns to."""
     body = machine.head.body_length if machine.head is not None else 0.0
-    return part.bbox_max[2] + length + ball + body + machine.margin
+    return top + length + ball + body + machine.margin
+
+
+def top_of(part: Part | None, spheres: Sequence[Any] = ()) -> float | None:
+    """The work Z of the top of what stands on the table, mm: the part's bounding box;
+    without a model the highest reference sphere of the sphere tests (``spheres``:
+    :class:`probegen.planning.sphere_test.SphereTestPlan`, each with the distance its
+    centre may be off when it is located); None when neither is known."""
+    if part is not None:
+        return float(part.bbox_max[2])
+    tops = [p.sphere.centre[2] + p.sphere.diameter / 2.0
+            + (p.feature.locate_uncertainty if p.feature.locate else 0.0) for p in spheres]
+    return max(tops) if tops else None
 
 
 def needs_index(node: ir.Node, machine: MachineProfile) -> bool:
@@ -296,11 +309,12 @@ def change_name(node: ir.Orient | ir.SelectStylus) -> str:
 
 
 def first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
-                 target: np.ndarray, part: Part, stylus: Any, machine: MachineProfile,
-                 clear: float) -> None:
+                 target: np.ndarray, part: Part | None, top: float, stylus: Any,
+                 machine: MachineProfile, clear: float) -> None:
     """The first move after a change taken at the index height goes to a point at that
     height (the over point: the probe moves level at the index height, then down).
-    ``target``: the move's target in ``frame``; ``stylus``: the collision check's
+    ``target``: the move's target in ``frame``; ``top``: :func:`top_of` the part (an
+    ``Orient`` needs ``part`` itself); ``stylus``: the collision check's
     (``ball`` radius and ``length``, mm); ``clear``: half the margin, mm.
 
     After a five-axis ``Orient`` (rotary axes, no head: the table turns under the
@@ -313,7 +327,7 @@ def first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
         PlanningError: the move goes below the index height.
         CollisionError: the five-axis levels are too low.
     """
-    height = index_height(part, stylus.length, stylus.ball, machine)
+    height = index_height(top, stylus.length, stylus.ball, machine)
     work = to_work(frame, target)
     if work[2] < height - LEVEL_SLACK:
         raise PlanningError(f"{change_name(change)}: the first move after it goes to work "
@@ -321,6 +335,7 @@ def first_after(change: ir.Orient | ir.SelectStylus, frame: ir.Orient | None,
                             "(the over point)")
     if not isinstance(change, ir.Orient) or change.head is not None or not change.rotary:
         return
+    assert part is not None, "an Orient is checked against the part"
     floor = part.turned(change.rotation).bbox_max[2] + stylus.ball + clear
     for what, z in (("its clearance level", change.clearance_z),
                     ("the over point", float(target[2]))):

@@ -258,7 +258,7 @@ def _first_target(nodes: Sequence[ir.Node], frame: ir.Orient | None) -> np.ndarr
     return None
 
 
-def with_index_moves(body: Sequence[ir.Node], part: Part, machine: MachineProfile,
+def with_index_moves(body: Sequence[ir.Node], top: float, machine: MachineProfile,
                      start: Stylus) -> tuple[ir.Node, ...]:
     """``body`` with the route of every change taken at the index height written out
     (:func:`probegen.planning.orient.needs_index`: every ``Orient``, a CMM's stylus
@@ -276,7 +276,8 @@ def with_index_moves(body: Sequence[ir.Node], part: Part, machine: MachineProfil
     next move at or above it needs no over point.  When the last position is not known
     exactly (a run-time coordinate, a local frame, the program's start), the move up
     goes to the index height over the next target instead; with no next move (the end
-    of the program) there is no over point.  ``start``: the stylus at the program's
+    of the program) there is no over point.  ``top``: the work Z of the part's top
+    (:func:`probegen.planning.orient.top_of`); ``start``: the stylus at the program's
     start.
 
     Raises:
@@ -310,7 +311,7 @@ def with_index_moves(body: Sequence[ir.Node], part: Part, machine: MachineProfil
             end += 1
         run = nodes[k:end]
         new = _frame_after(run, frame)
-        out += _route(run, here, frame, new, nodes[end:], part, machine, stylus)
+        out += _route(run, here, frame, new, nodes[end:], top, machine, stylus)
         for n in run:
             if isinstance(n, ir.SelectStylus):
                 stylus = (n.length, n.ball_diameter / 2.0)
@@ -328,13 +329,13 @@ def _frame_after(run: Sequence[ir.Node], frame: ir.Orient | None) -> ir.Orient |
 
 
 def _route(run: Sequence[ir.Node], here: np.ndarray | None, frame: ir.Orient | None,
-           new: ir.Orient | None, after: Sequence[ir.Node], part: Part,
+           new: ir.Orient | None, after: Sequence[ir.Node], top: float,
            machine: MachineProfile, stylus: tuple[float, float]) -> list[ir.Node]:
     """One run of changes from ``frame`` to ``new`` with its move up before and its move
     over after; ``stylus``: the (length, ball radius) in force before it, mm."""
     lengths = [stylus] + [(n.length, n.ball_diameter / 2.0) for n in run
                           if isinstance(n, ir.SelectStylus)]
-    height = max(index_height(part, length, ball, machine) for length, ball in lengths)
+    height = max(index_height(top, length, ball, machine) for length, ball in lengths)
     target = _first_target(after, new)
     if here is None and target is None:
         names = ", ".join(n.name if isinstance(n, ir.Orient) else n.label for n in run

@@ -55,6 +55,7 @@ def setup_for(m: MachineProfile, number: int, name: str, clearance_z: float) -> 
         program_size=m.controller.program_size,
         common_variables=m.controller.common_variables,
         alarm_text_length=m.controller.alarm_text_length,
+        stylus=m.stylus.label if m.rack else "",
         **calibration_header(m),
     )
 

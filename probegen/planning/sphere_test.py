@@ -91,6 +91,17 @@ def layout_points(feature: SphereTest) -> np.ndarray:
     return sl.layout(feature.layout, feature.points, feature.max_polar_angle)
 
 
+def sphere_test_profile(feature: SphereTest, machine: MachineProfile) -> MachineProfile:
+    """The profile ``feature`` is planned and evaluated with: ``machine`` with the stylus
+    the test names (``stylus = "D2"``) as its probe's, else ``machine``."""
+    from probegen.planning.styli import profile_with, stylus_named
+
+    if feature.stylus is None:
+        return machine
+    return profile_with(machine, stylus_named(machine, feature.stylus,
+                                              f"{feature.where}: stylus"))
+
+
 def plan_points(feature: SphereTest, sphere: SphereGeometry,
                 machine: MachineProfile) -> SphereTestPlan:
     """Choose the points, their order and the retract distance (method M1)."""

@@ -73,17 +73,18 @@ def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T
     """
     if force is not None:
         s = stylus_named(machine, force, "stylus")
-        return s, plan_with(_profile(machine, s))
+        return s, plan_with(profile_with(machine, s))
     failures: list[tuple[Stylus, PlanningError]] = []
     for s in rack_order(machine):
         try:
-            return s, plan_with(_profile(machine, s))
+            return s, plan_with(profile_with(machine, s))
         except PlanningError as exc:
             failures.append((s, exc))
     raise _none_plans(failures)
 
 
-def _profile(machine: MachineProfile, s: Stylus) -> MachineProfile:
+def profile_with(machine: MachineProfile, s: Stylus) -> MachineProfile:
+    """``machine`` with ``s`` as its probe's stylus (itself for its ``[probe]`` stylus)."""
     return machine if s == machine.stylus else machine.with_stylus(s)
 
 

@@ -153,6 +153,9 @@ class SphereTest:
         locate_uncertainty: how far the real centre may be from nominal (mm).
         tolerance: limits for pass/fail.
         actions: ``set_work_offset`` from the located centre (``spec_actions``).
+        stylus: the label of the rack's stylus the test is run with (``stylus = "D2"``:
+            the program takes it for the test and the calibration it gives is that
+            stylus's), or None for the ``[probe]`` stylus.
     """
 
     id: str
@@ -169,6 +172,7 @@ class SphereTest:
     locate_uncertainty: float
     tolerance: SphereTolerance = SphereTolerance()
     actions: Actions = Actions()
+    stylus: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -444,8 +448,7 @@ def _feature(t: Table, k: float, form_method: str = "minimum_zone",
         feature = read_planar(t, fid, kind, k, form_method)
     else:
         feature = _revolved(t, fid, kind, k, form_method)
-    if not isinstance(feature, SphereTest):
-        feature = dataclasses.replace(feature, stylus=_stylus(t, machine))
+    feature = dataclasses.replace(feature, stylus=_stylus(t, machine))
     if isinstance(feature, RevolvedSpec):
         feature = dataclasses.replace(feature, setup=_setup(t, machine))
     t.done()
