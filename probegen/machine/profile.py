@@ -72,6 +72,12 @@ class Probe:
         tool_number: tool (and length-offset) number of the probe.
         overtravel: how far past the nominal contact a probing move may go, mm.
         approach: the default distance off the surface where probing moves start, mm.
+        body_diameter: the probe body above the stylus (and the head or spindle nose it
+            hangs from, as far as ``body_length`` reaches), mm: the collision check's
+            cylinder on top of every stylus, so that a ball deeper than its stylus is
+            long never takes the body into the part (``[probe] body_diameter``; default
+            the ``[head]``'s, else :data:`DEFAULT_BODY`).
+        body_length: that cylinder's length from the stylus's end, mm.
     """
 
     ball_diameter: float
@@ -80,6 +86,8 @@ class Probe:
     tool_number: int
     overtravel: float
     approach: float
+    body_diameter: float = 0.0
+    body_length: float = 0.0
 
     @property
     def ball_radius(self) -> float:
@@ -294,6 +302,13 @@ class MachineProfile:
                         f"{option!r} to [controller] options if the control has it")
 
 
+DEFAULT_BODY = {"machine tool": (40.0, 50.0), "cmm": (14.0, 65.0)}
+"""The probe body a profile that states none is checked with, (diameter, length) mm: on
+a machine tool a spindle probe of the Renishaw OMP40 class (40 mm across, its body and
+holder 50 mm long below the spindle nose); on a CMM a touch-trigger probe module of the
+TP20 class with its head (14 mm across, 65 mm to the head's centre)."""
+
+
 def load_profile(path: str | Path) -> MachineProfile:
     """Load and validate a machine profile; errors name the file and key path."""
     file = str(path)
@@ -323,6 +338,7 @@ def load_profile(path: str | Path) -> MachineProfile:
         tilt=read_tilt(root, dialect),
         setups=read_setups(root, k),
     )
+    profile = replace(profile, probe=_probe_body(probe_table, k, profile))
     probe_table.done()
     m.done()
     root.done()
@@ -372,6 +388,23 @@ def _probe(t: Table, k: float) -> Probe:
     )
     if probe.shank_diameter > probe.ball_diameter:
         raise t.fail("shank_diameter", f"at most ball_diameter ({ball:g})")
+    return probe
+
+
+def _probe_body(t: Table, k: float, profile: MachineProfile) -> Probe:
+    """The ``[probe]`` with its body: ``body_diameter`` and ``body_length`` (mm) as given,
+    else the ``[head]``'s, else :data:`DEFAULT_BODY` for the machine's kind."""
+    head = profile.head
+    kind = "cmm" if profile.dialect == "dmis" else "machine tool"
+    diameter, length = ((head.body_diameter, head.body_length) if head is not None
+                        else DEFAULT_BODY[kind])
+    body = t.get_float("body_diameter", positive=True)
+    long = t.get_float("body_length", positive=True)
+    probe = replace(profile.probe,
+                    body_diameter=k * body if body is not None else diameter,
+                    body_length=k * long if long is not None else length)
+    if probe.body_diameter < probe.shank_diameter:
+        raise t.fail("body_diameter", f"at least shank_diameter ({probe.shank_diameter:g})")
     return probe
 
 

@@ -63,11 +63,36 @@ MESH_TOLERANCE = 0.01
 
 @dataclass(frozen=True, slots=True)
 class Stylus:
-    """The parts of the stylus that can touch: ball radius, shank radius and length."""
+    """The parts of the probe that can touch, with the ball's centre at the origin and
+    the probe along +Z: the ball (radius), the shank (radius) up to ``length`` from the
+    ball's centre, and the probe body (radius ``body``) from there ``body_length`` on
+    (mm; no body when ``body`` is 0).  The check's "shank" clearance is the smaller of
+    the shank's and the body's."""
 
     ball: float
     shank: float
     length: float
+    body: float = 0.0
+    body_length: float = 0.0
+
+    def cylinders(self) -> tuple[tuple[float, float, float], ...]:
+        """The shank and the body as ``(radius, low, high)``: heights along the probe
+        from the ball's centre, mm."""
+        shank = ((self.shank, self.ball, self.length),)
+        if self.body <= 0.0 or self.body_length <= 0.0:
+            return shank
+        return (*shank, (self.body, self.length, self.length + self.body_length))
+
+
+def probe_stylus(machine: MachineProfile, ball: float, shank: float | None = None,
+                 length: float | None = None) -> Stylus:
+    """The collision check's stylus of ``machine``'s probe with a ball of radius ``ball``
+    (mm); the ``[probe]`` stylus's shank radius and length unless given (another stylus
+    of the rack), and the probe body (``[probe] body_diameter``, ``body_length``)."""
+    probe = machine.probe
+    return Stylus(ball, probe.shank_diameter / 2.0 if shank is None else shank,
+                  probe.length if length is None else length,
+                  probe.body_diameter / 2.0, probe.body_length)
 
 
 class Obstacle(Protocol):
@@ -92,11 +117,13 @@ class SphereObstacle:
     def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
         ball = np.linalg.norm(self.centres - centre, axis=1) - self.radii - stylus.ball
         rel = self.centres - centre
-        h = np.clip(rel[:, 2], stylus.ball, stylus.length)
-        axis_pt = np.zeros_like(rel)
-        axis_pt[:, 2] = h
-        shank = np.linalg.norm(rel - axis_pt, axis=1) - self.radii - stylus.shank
-        return float(ball.min()), float(shank.min())
+        shank = math.inf
+        for radius, low, high in stylus.cylinders():
+            axis_pt = np.zeros_like(rel)
+            axis_pt[:, 2] = np.clip(rel[:, 2], low, high)
+            d = np.linalg.norm(rel - axis_pt, axis=1) - self.radii - radius
+            shank = min(shank, float(d.min()))
+        return float(ball.min()), shank
 
     def name_at(self, point: np.ndarray) -> str:
         k = int(np.argmin(np.linalg.norm(self.centres - point, axis=1) - self.radii))
@@ -119,7 +146,7 @@ class MeshObstacle:
         bvh.endModel()
         self.part = fcl.CollisionObject(bvh, fcl.Transform())
         self.request = fcl.DistanceRequest()
-        self._objects: dict[Stylus, tuple[Any, Any]] = {}
+        self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
         self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
         """Sweep results by (start, end, uncertainties, stylus, required): the mesh is
         shared per model, so a move checked once (one feature alone, then the whole
@@ -128,26 +155,31 @@ class MeshObstacle:
         self.floor = -MESH_TOLERANCE
         """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
 
-    def _stylus(self, stylus: Stylus) -> tuple[Any, Any]:
+    def _stylus(self, stylus: Stylus) -> tuple[Any, list[tuple[Any, float]]]:
+        """The fcl objects of ``stylus``: its ball, and its shank and body each with the
+        height of its centre above the ball's."""
         if stylus not in self._objects:
             fcl = self.fcl
-            shank_len = stylus.length - stylus.ball
             self._objects[stylus] = (
                 fcl.CollisionObject(fcl.Sphere(stylus.ball), fcl.Transform()),
-                fcl.CollisionObject(fcl.Cylinder(stylus.shank, shank_len), fcl.Transform()),
+                [(fcl.CollisionObject(fcl.Cylinder(radius, high - low), fcl.Transform()),
+                  (low + high) / 2.0) for radius, low, high in stylus.cylinders()],
             )
         return self._objects[stylus]
 
     def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
-        ball, shank = self._stylus(stylus)
+        ball, cylinders = self._stylus(stylus)
         ball.setTranslation(centre)
-        mid = (stylus.ball + stylus.length) / 2.0
-        shank.setTranslation(centre + np.array([0.0, 0.0, mid]))
-        out = []
-        for obj in (ball, shank):
-            d = self.fcl.distance(obj, self.part, self.request, self.fcl.DistanceResult())
-            out.append(max(float(d), 0.0) - MESH_TOLERANCE)
-        return out[0], out[1]
+        out = [self._to(ball)]
+        for obj, mid in cylinders:
+            obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
+            out.append(self._to(obj))
+        return out[0], min(out[1:])
+
+    def _to(self, obj: Any) -> float:
+        """The distance from ``obj`` to the part less the mesh's tolerance, mm."""
+        d = self.fcl.distance(obj, self.part, self.request, self.fcl.DistanceResult())
+        return max(float(d), 0.0) - MESH_TOLERANCE
 
     def _distance(self, shape: Any, transform: Any) -> float:
         obj = self.fcl.CollisionObject(shape, transform)
@@ -172,20 +204,27 @@ class MeshObstacle:
         rot = np.asarray(rotation_to_z(move / length)).T  # takes +Z onto the move
         ball = self._distance(fcl.Capsule(stylus.ball, length),
                               fcl.Transform(rot, (a + b) / 2.0))
+        return ball, min(self._swept_cylinder(a, b, radius, low, high)
+                         for radius, low, high in stylus.cylinders())
+
+    def _swept_cylinder(self, a: np.ndarray, b: np.ndarray, radius: float, low: float,
+                        high: float) -> float:
+        """A lower bound of the clearance of a cylinder along the probe (``radius``, from
+        ``low`` to ``high`` above the ball's centre) swept from ``a`` to ``b``, mm."""
+        fcl = self.fcl
+        move = b - a
         up = np.array([0.0, 0.0, 1.0])
-        low, high = stylus.ball, stylus.length
         if math.hypot(move[0], move[1]) < 1e-9:
             z0 = min(a[2], b[2]) + low
             z1 = max(a[2], b[2]) + high
             centre = np.array([a[0], a[1], (z0 + z1) / 2.0])
-            shank = self._distance(fcl.Cylinder(stylus.shank, z1 - z0), fcl.Transform(centre))
-            return ball, shank
+            return self._distance(fcl.Cylinder(radius, z1 - z0), fcl.Transform(centre))
         corners = [a + low * up, b + low * up, b + high * up, a + high * up]
         side = np.cross(move, up)
         side *= SLAB / float(np.linalg.norm(side))
         slab = np.array([c - side for c in corners] + [c + side for c in corners])
-        shank = self._distance(fcl.Convex(slab, 6, _SLAB_FACES), fcl.Transform())
-        return ball, shank - stylus.shank - SLAB
+        return self._distance(fcl.Convex(slab, 6, _SLAB_FACES), fcl.Transform()) \
+            - radius - SLAB
 
     def inside(self, point: np.ndarray) -> bool:
         """Whether ``point`` lies inside the material (a mesh query, for segment starts)."""
@@ -355,8 +394,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     r = setup.ball_diameter / 2.0
     clear = machine.margin / 2.0
     w = _Walker(plans, r)
-    probe = machine.probe
-    stylus = Stylus(r, probe.shank_diameter / 2.0, probe.length)
+    stylus = probe_stylus(machine, r)
     pos: np.ndarray | None = None
     pos_extra = 0.0
     touch_start: np.ndarray | None = None
@@ -396,7 +434,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                                     "index height needs the part model, found none")
             before = stylus
             if isinstance(node, ir.SelectStylus):
-                stylus = _stylus_of(node)
+                stylus = _stylus_of(node, machine)
             height = max(index_height(top, s.length, s.ball, machine)
                          for s in (before, stylus))
             here = None if pos is None else to_work(frame, pos)
@@ -420,7 +458,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
                 raise CollisionError(f"stylus change to {node.label}: the probe is at "
                                      f"z = {pos[2]:.3f}, expected the clearance level "
                                      f"{level:.3f} or above")
-            stylus = _stylus_of(node)
+            stylus = _stylus_of(node, machine)
             r = stylus.ball
             if pos is not None:
                 check(pos, pos, 0.0, 0.0, f"stylus change to {node.label}")
@@ -460,9 +498,11 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
     return ClearanceReport(tuple(out))
 
 
-def _stylus_of(node: ir.SelectStylus) -> Stylus:
-    """The stylus a ``SelectStylus`` takes, as the check sees it."""
-    return Stylus(node.ball_diameter / 2.0, node.shank_diameter / 2.0, node.length)
+def _stylus_of(node: ir.SelectStylus, machine: MachineProfile) -> Stylus:
+    """The stylus a ``SelectStylus`` takes, as the check sees it (the probe's body on
+    top of it)."""
+    return probe_stylus(machine, node.ball_diameter / 2.0, node.shank_diameter / 2.0,
+                        node.length)
 
 
 SLANT_FACTOR = 0.9
@@ -517,7 +557,7 @@ def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
          worst: np.ndarray) -> str:
     """What a sweep whose clearances (less ``required``) went negative ran into, e.g.
     ``the stylus ball cuts 0.015 mm into face 3; expected ...``."""
-    part = "ball" if ball < shank else "shank"
+    part = "ball" if ball < shank else "shank or probe body"
     gap = min(ball, shank) + required
     how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
     return (f"the stylus {part} {how} {obstacle.name_at(worst)}; expected a clearance of "

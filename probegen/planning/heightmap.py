@@ -19,13 +19,14 @@ Per segment, in order of cost:
    stylus can meet.  With ``q`` the required distance and ``R = max(r, shank) + q``, all
    mesh points within ``R`` lying ``q`` below the ball's lowest point clears ball and
    shank; for the shank alone ``shank + q`` and ``q`` below its bottom (``r`` above
-   the centre).
+   the centre); for the probe body ``body + q`` and ``q`` below its bottom (the
+   stylus's ``length`` above the centre).
 2. **Swept volumes** (python-fcl collision tests, ten times cheaper than distances):
    the ball swept along a segment is a capsule, so a capsule of radius ``r + q`` that
    meets no triangle proves the ball ``q`` clear over the whole segment (sphere tracing
    only samples it).  The shank swept vertically is a longer cylinder; swept along a
    slanted segment it lies inside a vertical cylinder around the segment's midpoint,
-   ``|Δxy|/2`` wider; grown by ``q`` in radius and at both ends.
+   ``|Δxy|/2`` wider; grown by ``q`` in radius and at both ends; the body likewise.
 3. A segment start not known to be outside the part (an end of a cleared segment, or
    above every triangle of its cell) makes the path unsure.
 
@@ -56,6 +57,7 @@ from probegen.planning.collision import (
     MeshObstacle,
     Obstacle,
     Stylus,
+    probe_stylus,
     touch_check_stop,
 )
 
@@ -268,15 +270,25 @@ class _Swept:
     def shank(self, a: np.ndarray, b: np.ndarray) -> bool:
         """The shank swept from ``a`` to ``b`` stays ``q`` clear: exact for a vertical
         segment, else tested as a vertical cylinder containing the sweep."""
-        key = ("shank", *sorted((tuple(a), tuple(b))))
+        return self.cylinder(a, b, 0)
+
+    def body(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """The probe body swept from ``a`` to ``b`` stays ``q`` clear (as the shank)."""
+        return all(self.cylinder(a, b, k) for k in range(1, len(self.stylus.cylinders())))
+
+    def cylinder(self, a: np.ndarray, b: np.ndarray, k: int) -> bool:
+        """Cylinder ``k`` of the stylus (:meth:`Stylus.cylinders`: 0 the shank, 1 the
+        body) swept from ``a`` to ``b`` stays ``q`` clear."""
+        key = (f"cylinder{k}", *sorted((tuple(a), tuple(b))))
         if key not in self.cache:
-            s, q = self.stylus, self.q
-            bottom = min(a[2], b[2]) + s.ball - q
-            top = max(a[2], b[2]) + s.length + q
+            radius, low, high = self.stylus.cylinders()[k]
+            q = self.q
+            bottom = min(a[2], b[2]) + low - q
+            top = max(a[2], b[2]) + high + q
             widen = float(np.hypot(*(b[:2] - a[:2]))) / 2.0
             mid = (a + b) / 2.0
             centre = np.array([mid[0], mid[1], (bottom + top) / 2.0])
-            shape = self.obstacle.fcl.Cylinder(s.shank + widen + q, top - bottom)
+            shape = self.obstacle.fcl.Cylinder(radius + widen + q, top - bottom)
             self.cache[key] = self._free(shape, centre, np.array([0.0, 0.0, 1.0]))
         return self.cache[key]
 
@@ -289,8 +301,7 @@ def clear_paths(paths: Sequence[Sequence[ir.Node]], obstacle: Obstacle, setup: i
     """
     r = setup.ball_diameter / 2.0
     clear = machine.margin / 2.0
-    probe = machine.probe
-    stylus = Stylus(r, probe.shank_diameter / 2.0, probe.length)
+    stylus = probe_stylus(machine, r)
     return clear_segments([path_segments(p, r, clear) for p in paths], obstacle, stylus,
                           clear)
 
@@ -316,6 +327,9 @@ def clear_segments(segments: Sequence[Sequence[Segment] | None], obstacle: Obsta
     low = np.minimum(a[:, 2], b[:, 2])
     both = hmap.highest_along(a, b, max(stylus.ball, stylus.shank) + q) <= low - r - q
     shank = both | (hmap.highest_along(a, b, stylus.shank + q) <= low + r - q)
+    body = np.ones(len(flat), dtype=bool)  # every mesh point near the body lies below it
+    for radius, bottom, _ in stylus.cylinders()[1:]:
+        body &= hmap.highest_along(a, b, radius + q) <= low + bottom - q
     above = hmap.highest_along(a, a, 0.0) < a[:, 2]
     swept = _Swept(obstacle, stylus, q)
     ok = np.ones(len(segments), dtype=bool)
@@ -332,6 +346,8 @@ def clear_segments(segments: Sequence[Sequence[Segment] | None], obstacle: Obsta
             ok[k] = False
         elif not both[i]:
             ok[k] = swept.ball(a[i], b[i]) and (bool(shank[i]) or swept.shank(a[i], b[i]))
+        if ok[k] and not body[i]:
+            ok[k] = swept.body(a[i], b[i])
         if ok[k]:
             _remember(obstacle, a[i], b[i], stylus, clear)
     result[:] = ok

@@ -42,9 +42,9 @@ from probegen.planning.collision import (
     MIN_STEP,
     MeshObstacle,
     Obstacle,
-    Stylus,
     describe,
     fmt,
+    probe_stylus,
     swept,
     touch_stop,
 )
@@ -69,9 +69,8 @@ class Sweeper:
     """
 
     def __init__(self, obstacle: Obstacle, machine: MachineProfile, ball: float) -> None:
-        probe = machine.probe
         self.obstacle = obstacle
-        self.stylus = Stylus(ball, probe.shank_diameter / 2.0, probe.length)
+        self.stylus = probe_stylus(machine, ball)
         self.required = machine.margin / 2.0
         self.feeds = machine.feeds
 

@@ -37,7 +37,7 @@ from probegen import ir
 from probegen.errors import CollisionError
 from probegen.geometry import sphere_layout as sl
 from probegen.machine.kinematics import head_shift
-from probegen.planning.collision import MIN_STEP, Stylus, _sweep
+from probegen.planning.collision import MIN_STEP, Stylus, _sweep, probe_stylus
 from probegen.planning.rotary_spec import RotarySpec
 from probegen.planning.setup import make_setup
 from probegen.spec.model import Spec
@@ -295,7 +295,7 @@ class _Checker:
     def __init__(self, spec: RotarySpec) -> None:
         probe = spec.machine.probe
         self.spec = spec
-        self.stylus = Stylus(probe.ball_radius, probe.shank_diameter / 2.0, probe.length)
+        self.stylus = probe_stylus(spec.machine, probe.ball_radius)
         self.clear = spec.machine.margin / 2.0
         self.b = self.c = 0.0
         self.least = math.inf
