@@ -469,8 +469,8 @@ def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) 
                            faces=(40,), axis=(1.0, 0.0, 0.0))
     assert revolved_left_out(bore, loaded, machine, "", least) == (
         "R9 bore D0.800 (cylinder, faces 40): bore D0.800: the smallest stylus D1 (ball "
-        "D1.000) needs D1.800 or more (the ball and 0.400 mm each side: retract and safe "
-        "circle): a smaller stylus")
+        "D1.000) needs D1.800 or more, the ball and 0.400 mm each side for the retract and "
+        "safe circle: a smaller stylus")
 
 
 @settings(max_examples=examples(200))

@@ -74,12 +74,12 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
 
 
 def _needs(machine: MachineProfile, least: float) -> str:
-    """``the smallest stylus D2 (ball D2.000) needs D4.000 or more (the ball and 1.000 mm
-    each side: retract and safe circle)``: what the smallest bore ``least`` (mm) is made
-    of."""
+    """``the smallest stylus D2 (ball D2.000) needs D4.000 or more, the ball and 1.000 mm
+    each side for the retract and safe circle``: what the smallest bore ``least`` (mm) is
+    made of."""
     side = least / 2.0 - smallest_stylus(machine).ball_radius
-    return (f"{_smallest_text(machine)} needs D{least:.3f} or more (the ball and "
-            f"{side:.3f} mm each side: retract and safe circle)")
+    return (f"{_smallest_text(machine)} needs D{least:.3f} or more, the ball and "
+            f"{side:.3f} mm each side for the retract and safe circle")
 
 
 def _smallest_text(machine: MachineProfile) -> str:
