@@ -32,7 +32,7 @@ REASONS = [
     "stylus",
     "R2 bore D20.000 (cylinder, faces 8): blind, depth 2.000 mm: the ball reaches no section "
     "(it needs 3.500 mm below one: radius 3.000 + margin 0.500): a smaller stylus [no touch "
-    "can be reached safely: touch 1 dropped: its approach from (5.000, 0.000, 19.000) to "
+    "can be reached safely: touch 1 dropped: its approach from (6.000, 0.000, 19.000) to "
     "(6.730, 0.000, 19.000): the stylus ball cuts 0.015 mm into face 10; 7 more touches "
     "dropped]",
     "R3 bore D8.000 (cylinder, faces 9): axis (1.0000, 0.0000, 0.0000) is 90.0 deg from Z, "
@@ -177,3 +177,28 @@ def test_the_smallest_styluss_own_reason_is_read_not_what_the_others_said() -> N
                            "safely: no room: the stylus shank meets face 12 (a smaller or "
                            "longer stylus, or another orientation) [")
     assert "where it is measured" not in line and "arc too short" not in line
+
+
+def test_a_shank_collision_names_the_face_the_shank_meets(tmp_path: Path) -> None:
+    """The ball 2 mm over a floor, the shank up through a roof 8 mm higher: a face of the
+    roof is named, not the floor (the face nearest the ball centre)."""
+    import numpy as np
+
+    from probegen.planning.collision import Stylus, describe, obstacle_for
+
+    part = Box(40, 40, 5, align=(C, C, MIN)) + Pos(10, 0, 15) * Box(20, 40, 5,
+                                                                   align=(C, C, MIN))
+    path = tmp_path / "roof.step"
+    export_step(part, path)
+    loaded = cad.load_part(path)
+    floor = f"face {cad.face_at(loaded.model, (-10.0, 0.0, 5.0)).id}"
+    roof = {f"face {cad.face_at(loaded.model, (10.0, 0.0, z)).id}" for z in (15.0, 20.0)}
+    assert floor not in roof
+    obstacle, stylus, centre = obstacle_for(loaded, []), Stylus(1.0, 0.7, 30.0), \
+        np.array([10.0, 0.0, 7.0])
+    ball, shank = obstacle.clearance(centre, stylus)
+    assert ball > 0.5 and shank < 0.0
+    said = describe(obstacle, ball - 0.25, shank - 0.25, 0.25, centre, stylus)
+    assert said.startswith("the stylus shank cuts 0.010 mm into face ")
+    assert said.split(" into ")[1].split(";")[0] in roof
+    assert floor in describe(obstacle, ball - 0.25, shank - 0.25, 0.25, centre)

@@ -195,6 +195,25 @@ class MeshObstacle:
             hit = self._inside[key] = bool(self.mesh.contains(point[None])[0])
         return hit
 
+    def shank_face(self, centre: np.ndarray, stylus: Stylus) -> str:
+        """The face (or triangle) the shank overlaps, or else comes nearest, with the
+        ball centre at ``centre``: the deepest contact, or one BVH distance query."""
+        fcl = self.fcl
+        shank = self._stylus(stylus)[1]
+        shank.setTranslation(centre + np.array([0.0, 0.0, (stylus.ball + stylus.length) / 2.0]))
+        hit = fcl.CollisionResult()
+        fcl.collide(self.part, shank, fcl.CollisionRequest(num_max_contacts=16,
+                                                          enable_contact=True), hit)
+        tris = [(c.penetration_depth, max(int(c.b1), int(c.b2))) for c in hit.contacts]
+        if tris:
+            tri = max(tris)[1]
+        else:
+            near = fcl.DistanceResult()
+            fcl.distance(self.part, shank, fcl.DistanceRequest(enable_nearest_points=True),
+                         near)
+            tri = int(near.b1)
+        return f"triangle {tri}" if self.face_ids is None else f"face {int(self.face_ids[tri])}"
+
     def name_at(self, point: np.ndarray) -> str:
         """The face (or triangle) nearest ``point``, by one BVH distance query."""
         fcl = self.fcl
@@ -381,7 +400,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
         if min(seg.ball, seg.shank) < 0.0:
             raise CollisionError(
                 f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
-                f"{fmt(a)} to {fmt(b)}: {describe(obstacle, seg.ball, seg.shank, clear, worst)}")
+                f"{fmt(a)} to {fmt(b)}: "
+                f"{describe(obstacle, seg.ball, seg.shank, clear, worst, stylus)}")
         outside.update((_t(a), _t(b)))
 
     for node in ir.walk(program.body):
@@ -510,13 +530,18 @@ def swept(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float
 
 
 def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
-         worst: np.ndarray) -> str:
+         worst: np.ndarray, stylus: Stylus | None = None) -> str:
     """What a sweep whose clearances (less ``required``) went negative ran into, e.g.
-    ``the stylus ball cuts 0.015 mm into face 3; expected ...``."""
+    ``the stylus ball cuts 0.015 mm into face 3; expected ...``: the face nearest the
+    ball centre ``worst``, or for the shank (with ``stylus``, on a mesh) the face the
+    shank meets (the ball's nearest face is often the measured one, far below it)."""
     part = "ball" if ball < shank else "shank"
     gap = min(ball, shank) + required
     how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
-    return (f"the stylus {part} {how} {obstacle.name_at(worst)}; expected a clearance of "
+    shank_face = getattr(obstacle, "shank_face", None)
+    name = (shank_face(worst, stylus) if part == "shank" and stylus is not None
+            and shank_face is not None else obstacle.name_at(worst))
+    return (f"the stylus {part} {how} {name}; expected a clearance of "
             f"at least {required:.3f} mm")
 
 
