@@ -80,8 +80,9 @@ def test_model_without_a_plannable_feature_completes_and_names_the_reasons(
                                       r"\((cylinder|cone), faces [\d,]+\): axis "
                                       r"\(.+\) is 90\.0 deg from Z, not along the probe: "
                                       r"needs an orientation or a setup(; bore D[\d.]+: the "
-                                      r"stylus ball D6\.000 needs D8\.000 or more: a smaller "
-                                      r"stylus)?", n) for n in notes)
+                                      r"stylus ball D6\.000 needs D8\.000 or more, the ball and "
+                                      r"1\.000 mm each side for the retract and safe circle: "
+                                      r"a smaller stylus)?", n) for n in notes)
     planned = plan_program(spec, runtime_variables=True, part=part)
     assert planned.revolved == () and planned.program.body == ()
     assert main(["plan", str(model), "--all-revolved", "--machine",

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from probegen import cad, ir
 from probegen.cad import part as part_module
-from probegen.errors import CollisionError, PlanningError
+from probegen.errors import CollisionError, PlanningError, SpecError
 from probegen.ir import frames
 from probegen.machine.profile import Head, MachineProfile, Stylus, Tilt, load_profile
 from probegen.planning import PlannedProgram, plan_program
@@ -358,13 +358,15 @@ def test_the_stylus_that_fits(planned: tuple[str, PlannedProgram]) -> None:
 
 
 def test_a_forced_stylus(model: Path, loaded: cad.Part) -> None:
-    from probegen.planning.orient import pick_stylus
+    from probegen.planning import orient, styli
 
+    assert orient.pick_stylus is styli.pick_stylus  # one choice serves the planner
     machine = profile("head")
-    chosen, value = pick_stylus(machine, lambda m: m.probe.ball_diameter, "D3")
+    chosen, value = orient.pick_stylus(machine, lambda m: m.probe.ball_diameter, "D3")
     assert (chosen.label, value) == ("D3", 3.0)
-    with pytest.raises(PlanningError, match="expected one of D6, D1, D2, D3"):
-        pick_stylus(machine, lambda m: 0, "D9")
+    with pytest.raises(SpecError, match=r"expected a stylus of the machine's rack "
+                                        r"\(D6, D3, D2, D1; .*found 'D9'"):
+        orient.pick_stylus(machine, lambda m: 0, "D9")
 
 
 def test_group_order_has_the_fewest_changes() -> None:
@@ -467,7 +469,8 @@ def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) 
                            faces=(40,), axis=(1.0, 0.0, 0.0))
     assert revolved_left_out(bore, loaded, machine, "", least) == (
         "R9 bore D0.800 (cylinder, faces 40): bore D0.800: the smallest stylus D1 (ball "
-        "D1.000) needs D1.800 or more: a smaller stylus")
+        "D1.000) needs D1.800 or more, the ball and 0.400 mm each side for the retract and "
+        "safe circle: a smaller stylus")
 
 
 @settings(max_examples=examples(200))

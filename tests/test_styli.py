@@ -87,7 +87,8 @@ def test_none_plans_raises_the_smallest_error_with_what_each_said() -> None:
         pick_stylus(FIVE, bore(2.5))
     text = str(info.value)
     assert text.startswith("spec.toml: feature[0]: bore 2.5: expected a ball under 1.5 mm, "
-                           "found 2 (no stylus of the rack plans it, largest first: ")
+                           "found 2 (with D2, the smallest stylus; no stylus of the rack "
+                           "plans it, largest first: ")
     # what all the messages share (the feature's "where") is said once, at the start
     assert text.endswith("D6 (ball 6 mm): expected a ball under 1.5 mm, found 6; "
                          "D3 (ball 3 mm): expected a ball under 1.5 mm, found 3; "
@@ -96,7 +97,8 @@ def test_none_plans_raises_the_smallest_error_with_what_each_said() -> None:
 
 def test_the_error_keeps_the_smallest_styluss_class() -> None:
     with pytest.raises(CollisionError, match=r"the probe body hits the part at depth 30 of "
-                                             r"99 mm \(no stylus"):
+                                             r"99 mm \(with D2, the smallest stylus; "
+                                             r"no stylus"):
         pick_stylus(FIVE, bore(20.0, depth=99.0))
 
 

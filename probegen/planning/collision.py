@@ -234,6 +234,31 @@ class MeshObstacle:
             hit = self._inside[key] = bool(self.mesh.contains(point[None])[0])
         return hit
 
+    def shank_face(self, centre: np.ndarray, stylus: Stylus) -> tuple[str, str]:
+        """Which of the shank and the probe body comes nearest the part (or overlaps it
+        deepest) with the ball centre at ``centre``, and the face (or triangle) it
+        meets: the deepest contact, or one BVH distance query."""
+        fcl = self.fcl
+        found: list[tuple[float, int, str]] = []
+        for (obj, mid), what in zip(self._stylus(stylus)[1], ("shank", "probe body"),
+                                    strict=False):
+            obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
+            hit = fcl.CollisionResult()
+            fcl.collide(self.part, obj, fcl.CollisionRequest(num_max_contacts=16,
+                                                             enable_contact=True), hit)
+            tris = [(c.penetration_depth, max(int(c.b1), int(c.b2))) for c in hit.contacts]
+            if tris:
+                depth, tri = max(tris)
+                found.append((-depth, tri, what))
+                continue
+            near = fcl.DistanceResult()
+            fcl.distance(self.part, obj, fcl.DistanceRequest(enable_nearest_points=True),
+                         near)
+            found.append((float(near.min_distance), int(near.b1), what))
+        _, tri, what = min(found)
+        face = f"triangle {tri}" if self.face_ids is None else f"face {int(self.face_ids[tri])}"
+        return what, face
+
     def name_at(self, point: np.ndarray) -> str:
         """The face (or triangle) nearest ``point``, by one BVH distance query."""
         fcl = self.fcl
@@ -420,7 +445,8 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
         if min(seg.ball, seg.shank) < 0.0:
             raise CollisionError(
                 f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
-                f"{fmt(a)} to {fmt(b)}: {describe(obstacle, seg.ball, seg.shank, clear, worst)}")
+                f"{fmt(a)} to {fmt(b)}: "
+                f"{describe(obstacle, seg.ball, seg.shank, clear, worst, stylus)}")
         outside.update((_t(a), _t(b)))
 
     for node in ir.walk(program.body):
@@ -554,14 +580,21 @@ def swept(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float
 
 
 def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
-         worst: np.ndarray) -> str:
+         worst: np.ndarray, stylus: Stylus | None = None) -> str:
     """What a sweep whose clearances (less ``required``) went negative ran into, e.g.
-    ``the stylus ball cuts 0.015 mm into face 3; expected ...``."""
+    ``the stylus ball cuts 0.015 mm into face 3; expected ...``: the face nearest the
+    ball centre ``worst``, or for the shank or the probe body (with ``stylus``, on a
+    mesh) the one of them that meets the part and the face it meets (the ball's nearest
+    face is often the measured one, far below it)."""
     part = "ball" if ball < shank else "shank or probe body"
     gap = min(ball, shank) + required
     how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
-    return (f"the stylus {part} {how} {obstacle.name_at(worst)}; expected a clearance of "
-            f"at least {required:.3f} mm")
+    shank_face = getattr(obstacle, "shank_face", None)
+    name = obstacle.name_at(worst)
+    if part != "ball" and stylus is not None and shank_face is not None:
+        part, name = shank_face(worst, stylus)
+    who = "the probe body" if part == "probe body" else f"the stylus {part}"
+    return f"{who} {how} {name}; expected a clearance of at least {required:.3f} mm"
 
 
 def _sweep(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float,

@@ -18,12 +18,14 @@ from typing import TYPE_CHECKING, Any
 
 from probegen import ir
 from probegen.machine.profile import MachineProfile
-from probegen.planning.styli import smallest_stylus
+from probegen.planning.styli import own_reason, smallest_stylus
 
 if TYPE_CHECKING:
     from probegen.cad import Part
 
 _ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
+_SMALL = re.compile(r"inner radius ([\d.]+) mm: the safe circle R - r - d = [-\d.]+ mm: "
+                    r"expected R > r \+ d")
 _HIT = re.compile(r"the stylus (ball|shank|holder)[^;]*?(?:into|of) face (\d+)")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
 LONGEST = 240
@@ -64,11 +66,20 @@ def revolved_left_out(f: Any, part: Part, machine: MachineProfile, problem: str,
                        f"{tilt:.1f} deg from Z, not along the probe: needs an orientation "
                        "or a setup")
     if f.inner and f.type == "cylinder" and 2.0 * f.radius < least:
-        reasons.append(f"bore D{2.0 * f.radius:.3f}: {_smallest_text(machine)} needs "
-                       f"D{least:.3f} or more: a smaller stylus")
+        reasons.append(f"bore D{2.0 * f.radius:.3f}: {_needs(machine, least)}: a smaller "
+                       "stylus")
     if reasons:
         return f"{head}: {'; '.join(reasons)}"
     return f"{head}: {_planning_reason(f, part, machine, problem, least)}"
+
+
+def _needs(machine: MachineProfile, least: float) -> str:
+    """``the smallest stylus D2 (ball D2.000) needs D4.000 or more, the ball and 1.000 mm
+    each side for the retract and safe circle``: what the smallest bore ``least`` (mm) is
+    made of."""
+    side = least / 2.0 - smallest_stylus(machine).ball_radius
+    return (f"{_smallest_text(machine)} needs D{least:.3f} or more, the ball and "
+            f"{side:.3f} mm each side for the retract and safe circle")
 
 
 def _smallest_text(machine: MachineProfile) -> str:
@@ -81,18 +92,23 @@ def _smallest_text(machine: MachineProfile) -> str:
 
 def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
                      least: float) -> str:
-    """The reason of an accessible feature that does not plan or collides."""
+    """The reason of an accessible feature that does not plan or collides (the smallest
+    stylus's, :func:`probegen.planning.styli.own_reason`)."""
     r, m = smallest_stylus(machine).ball_radius, machine.margin
+    problem = own_reason(problem)
     if "closed above" in problem:
         return f"{_after(problem, 'closed above')}: reach it from below: needs a setup"
-    if "expected R > r + d" in problem:
-        return (f"{describe(f)} is too small where it is measured: "
-                f"{_smallest_text(machine)} needs D{least:.3f} or more: a smaller stylus")
+    small = _SMALL.search(problem)
+    if small:
+        return (f"{describe(f)} is D{2.0 * float(small[1]):.3f} where it is measured: "
+                f"{_needs(machine, least)}: a smaller stylus")
     arcs = _ARCS.search(problem)
     if arcs:
         longest = max(float(a) for a in arcs[2].split(", "))
-        return (f"arc too short: the longest arc on the faces is {longest:.3f} mm, the "
-                f"ball D{2.0 * r:.3f} needs {2.0 * float(arcs[1]):.3f} mm: a smaller stylus")
+        end = float(arcs[1])
+        return (f"arc too short: the longest arc of the section measured is {longest:.3f} "
+                f"mm, the ball D{2.0 * r:.3f} needs {2.0 * end:.3f} mm (its radius and the "
+                f"margin {end - r:.3f} mm at each end): a smaller stylus")
     if "no touch can be reached safely" in problem or "collides" in problem:
         depth = _blind_depth(f, part)
         if depth is not None and depth < r + m:

@@ -1,6 +1,7 @@
 """Probe orientations and styli (issue 17): which orientation of the machine reaches an
-approach direction, the ``ir.Orient`` node of it, the stylus of the rack a feature is
-measured with, and the order of the (stylus, orientation) groups of a program.
+approach direction, the ``ir.Orient`` node of it, the ``ir.SelectStylus`` node of a
+stylus (which stylus: :func:`probegen.planning.styli.pick_stylus`, re-exported here), and
+the order of the (stylus, orientation) groups of a program.
 
 Conventions:
 
@@ -28,21 +29,21 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from probegen import ir
-from probegen.errors import CollisionError, PlanningError, ProbegenError
+from probegen.errors import CollisionError, PlanningError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
+from probegen.planning.styli import pick_stylus as pick_stylus  # the one choice, re-exported
 
 if TYPE_CHECKING:
     from probegen.cad import Part
 
-T = TypeVar("T")
 GRID_SNAP = 1e-6
 """A head angle within this (deg) of the step grid is on it (snapped)."""
 LEAST_GAP = 10.0
@@ -205,34 +206,6 @@ def select_node(s: Stylus) -> ir.SelectStylus:
     """The ``ir.SelectStylus`` of stylus ``s``."""
     return ir.SelectStylus(s.label, s.tool_number, s.ball_diameter, s.shank_diameter,
                            s.length)
-
-
-def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T],
-                force: str | None = None) -> tuple[Stylus, T]:
-    """The stylus a feature is measured with and its plan: the one labelled ``force``,
-    else the largest ball of ``machine.styli()`` that plans (``plan_with`` of the profile
-    with it as the probe raises no :class:`ProbegenError`); ties keep profile order.
-
-    Raises:
-        PlanningError: ``force`` names no stylus of the rack.
-        ProbegenError: no stylus plans (the largest ball's reason).
-    """
-    styli = machine.styli()
-    if force is not None:
-        chosen = [s for s in styli if s.label == force]
-        if not chosen:
-            raise PlanningError(f"stylus {force}: expected one of "
-                                f"{', '.join(s.label for s in styli)}, found none")
-        return chosen[0], plan_with(machine.with_stylus(chosen[0]))
-    order = sorted(range(len(styli)), key=lambda k: (-styli[k].ball_diameter, k))
-    first: ProbegenError | None = None
-    for k in order:
-        try:
-            return styli[k], plan_with(machine.with_stylus(styli[k]))
-        except ProbegenError as exc:
-            first = first or exc
-    assert first is not None
-    raise first
 
 
 # ------------------------------------------------------- the moves of a change

@@ -298,7 +298,8 @@ def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProf
     the plan that keeps the most touches.
 
     Raises:
-        PlanningError: nothing plans (the first reason).
+        PlanningError: nothing plans: the reason of the smallest retract on the
+            feature's own sections (the most permissive attempt).
         CollisionError: no touch can be made safe (names the move and the face).
 
     The plan is kept on the part by (spec feature, machine, clearance level):
@@ -316,10 +317,12 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
     errors: list[ProbegenError] = []
     best: tuple[ResolvedRevolved, Rerouted] | None = None
+    own = 0  # the errors of the feature's own sections (the first candidate)
     for k, candidate in enumerate(_candidates(resolved, part)):
         # other sections only with the retract that served the default ones best
         only = best[1].plan.sections[0].retract if k and best is not None else None
         safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
+        own = own if k else len(errors)
         if safe is None:
             continue
         if best is None or _touches(safe.plan) > _touches(best[1].plan):
@@ -330,7 +333,9 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         if not safe.dropped:
             break
     if best is None:
-        raise errors[0]
+        # the most permissive attempt's reason: the smallest retract on the feature's
+        # own sections (a larger retract's "R > r + d" is not why a bore is left out)
+        raise errors[own - 1 if own else 0]
     chosen, safe = best
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 

@@ -5,7 +5,9 @@ margin (a larger ball filters the surface's roughness less, bends less and is le
 likely to break), and of two equal balls the shorter stylus (stiffer; the longer one is
 tried next, for the depth it reaches).  :func:`pick_stylus` plans the feature with each
 stylus in that order (the caller's ``plan_with``, handed ``machine.with_stylus(s)``) and
-keeps the first plan that succeeds; a spec's ``stylus = "D2"`` forces one.
+keeps the first plan that succeeds; a spec's ``stylus = "D2"`` forces one.  It is the
+one choice of the whole planner (:mod:`probegen.planning.oriented` plans every revolved
+feature through it, in each orientation it tries).
 """
 
 from __future__ import annotations
@@ -21,6 +23,9 @@ T = TypeVar("T")
 
 SAID_LENGTH = 90
 """Longest excerpt of each stylus's error in the message when none plans, characters."""
+NONE_PLANS = "the smallest stylus; no stylus of the rack plans it, largest first: "
+"""What the message of a feature no stylus plans says after the smallest stylus's own
+error and its label (:func:`own_reason` cuts there)."""
 
 
 def rack_order(machine: MachineProfile) -> tuple[Stylus, ...]:
@@ -68,8 +73,10 @@ def pick_stylus(machine: MachineProfile, plan_with: Callable[[MachineProfile], T
     Raises:
         SpecError: ``force`` names no stylus of the rack.
         PlanningError: no stylus plans the feature: the error of the smallest stylus (of
-            its class), with what each stylus said; any other error of ``plan_with``
-            goes through at once.
+            its class; the one the user can act on: a smaller stylus or the part), naming
+            it, with what each stylus said; any other error of ``plan_with`` (a
+            ``ModelError``, a ``SpecError`` of the spec or of a calibration without the
+            stylus) goes through at once.
     """
     if force is not None:
         s = stylus_named(machine, force, "stylus")
@@ -89,9 +96,10 @@ def profile_with(machine: MachineProfile, s: Stylus) -> MachineProfile:
 
 
 def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
-    """The smallest stylus's error with a sentence of what every stylus said (one stylus:
-    its error unchanged)."""
-    last = failures[-1][1]
+    """The smallest stylus's error (the most permissive stylus: what the user acts on),
+    naming it, with a sentence of what every stylus said (one stylus: its error
+    unchanged)."""
+    smallest, last = failures[-1]
     if len(failures) == 1:
         return last
     texts = [str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -100,7 +108,17 @@ def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
     cut = common.rfind(": ") + 2 if ": " in common else 0
     said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
                      for (s, _), text in zip(failures, texts, strict=True))
-    return type(last)(f"{last} (no stylus of the rack plans it, largest first: {said})")
+    return type(last)(f"{last} (with {smallest.label}, {NONE_PLANS}{said})")
+
+
+def own_reason(message: str) -> str:
+    """The smallest stylus's own error of a :func:`pick_stylus` message where no stylus
+    plans (without what each stylus said, whose texts would be taken for its reason);
+    any other message unchanged."""
+    at = message.find(NONE_PLANS)
+    if at < 0:
+        return message
+    return message[:message.rfind(" (with ", 0, at)]
 
 
 def _short(text: str) -> str:
