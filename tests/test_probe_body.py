@@ -41,7 +41,8 @@ def deep(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def profile_with(tmp_path: Path, probe: str, source: str = "vmc-fanuc.toml") -> Path:
-    text = (MACHINES / source).read_text(encoding="utf-8").replace(
+    lines = (MACHINES / source).read_text(encoding="utf-8").splitlines(keepends=True)
+    text = "".join(line for line in lines if not line.startswith("body_")).replace(
         "[probe]\n", f"[probe]\n{probe}\n", 1)
     path = tmp_path / "profile.toml"
     path.write_text(text, encoding="utf-8")
@@ -49,7 +50,7 @@ def profile_with(tmp_path: Path, probe: str, source: str = "vmc-fanuc.toml") -> 
 
 
 def test_the_body_defaults_by_kind_and_the_head(tmp_path: Path) -> None:
-    tool = load_profile(MACHINES / "vmc-fanuc.toml").probe
+    tool = load_profile(profile_with(tmp_path, "")).probe  # the sample without its keys
     assert (tool.body_diameter, tool.body_length) == DEFAULT_BODY["machine tool"]
     cmm = load_profile(MACHINES / "cmm.toml")
     assert cmm.head is not None
