@@ -66,6 +66,16 @@ at = [65.0, 30.0, 5.0]           # the D10 bore from the bottom, 15 deep: faces 
 tolerance = {{ diameter = [-0.01, 0.01], position = 0.02 }}
 {extra}'''
 OFFSET = np.array([0.004, -0.003, 0.002])
+
+
+def five_without_setups() -> str:
+    """The five-axis sample profile's text without its ``[[setup]]`` block (the sample
+    declares ``FLIPPED``, with a note of its own): the tests add their own setups."""
+    text = FIVE.read_text(encoding="utf-8")
+    start = text.index("# The setups the operator may turn the part into")
+    end = text.index("[feeds]", start)
+    assert "[[setup]]" in text[start:end] and "[[setup]]" not in text[end:]
+    return text[:start] + text[end:]
 """Where the part really lies on the table, off its nominal place (table frame), mm."""
 
 
@@ -86,7 +96,7 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     each (``spec.toml``, ``nosetup.toml``)."""
     tmp = tmp_path_factory.mktemp("setups")
     block(tmp / "part.step")
-    base = FIVE.read_text(encoding="utf-8")
+    base = five_without_setups()
     (tmp / "five.toml").write_text(base + FLIPPED, encoding="utf-8")
     (tmp / "five0.toml").write_text(base, encoding="utf-8")
     (tmp / "spec.toml").write_text(SPEC.format(profile="five.toml", extra=""),
@@ -138,7 +148,7 @@ def test_a_spec_forces_a_setup_and_an_unknown_one_is_refused(folder: Path) -> No
 
 
 def test_a_setup_with_an_origin_is_refused(folder: Path) -> None:
-    base = FIVE.read_text(encoding="utf-8")
+    base = five_without_setups()
     (folder / "five_origin.toml").write_text(
         base + FLIPPED + "origin = [0.0, 60.0, 40.0]\n", encoding="utf-8")
     (folder / "origin.toml").write_text(SPEC.format(profile="five_origin.toml", extra=""),
@@ -299,7 +309,7 @@ def test_a_setup_feature_may_need_a_tilt_too(folder: Path) -> None:
     from probegen.evaluate.setups import ingest_setups
     from probegen.planning.identity import planned_touches
 
-    (folder / "five_side.toml").write_text(FIVE.read_text(encoding="utf-8") + SIDE,
+    (folder / "five_side.toml").write_text(five_without_setups() + SIDE,
                                            encoding="utf-8")
     (folder / "side.toml").write_text(SPEC.format(profile="five_side.toml", extra=""),
                                       encoding="utf-8")
