@@ -415,3 +415,51 @@ def test_a_spec_all_in_one_setup_ingests_in_part_coordinates(folder: Path,
                  str(folder / "bottom.toml"), "--setup", "FLIPPED", "-o", str(log)]) == 0
     (bottom,) = ingest_setups([log], spec).revolved
     assert bottom.centre[:2] == pytest.approx((70.0, 30.0), abs=1e-3)
+
+
+ODD = REPO / "samples" / "parts" / "odd_angle.step"
+SAMPLES = {"fanuc": FIVE, "dmis": REPO / "samples" / "machines" / "cmm.toml"}
+
+
+@pytest.mark.parametrize("dialect", ["fanuc", "dmis"])
+def test_the_sample_profiles_measure_a_face_down_hole_in_their_flipped_setup(
+        tmp_path: Path, dialect: str) -> None:
+    """``plan --all-revolved`` on odd_angle.step with each sample profile as is (its
+    ``[[setup]]`` FLIPPED): the D12 hole that opens downwards at (50, 25) goes to the
+    FLIPPED program (no head index nor tilt reaches it as loaded); both programs run on
+    the virtual machine / CMM with the part turned as the setup says and off by OFFSET
+    (table frame).  Five-axis: the logs ingested together give the hole in part
+    coordinates, off by Rᵀ·OFFSET, to 1 µm; CMM: the CMM reports it in the setup's
+    frame, at R·(50, 25) + OFFSET."""
+    from probegen import cad
+    from probegen.cli.plan import program_text
+    from probegen.evaluate.setups import ingest_setups
+    from probegen.machine.profile import load_profile
+    from probegen.planning.setups import all_revolved_setups
+    from probegen.results import read_dmis_output
+
+    part = cad.load_part(ODD)
+    spec, notes = all_revolved_setups(part, load_profile(SAMPLES[dialect]))
+    setups = plan_setups(spec, runtime_variables=dialect == "fanuc", part=part)
+    assert [(sp.name, sp.features) for sp, _ in setups][1] == ("FLIPPED", ("R2",))
+    assert not any(n.startswith("R2 ") for n in notes)
+    outputs = []
+    for sp, planned in setups:
+        program = tmp_path / f"{sp.name.replace(' ', '_')}.{'nc' if dialect == 'fanuc' else 'dmi'}"
+        program.write_text(program_text(dialect, planned, notes), encoding="ascii")
+        log = program.with_suffix(".log")
+        args = ["-q", "sim", str(program), "--part", str(ODD), "--machine",
+                str(SAMPLES[dialect]), "--offset", *(str(v) for v in OFFSET), "-o", str(log)]
+        assert main(args + (["--setup", sp.name] if sp.setup else [])) == 0, sp.name
+        outputs.append(log)
+    if dialect == "dmis":
+        (fa,) = read_dmis_output(outputs[1]).features
+        assert fa.name == "R2"
+        assert fa.position[:2] == pytest.approx((50.0 + OFFSET[0], -25.0 + OFFSET[1]),
+                                                abs=1e-3)
+        return
+    got = {r.feature: r for r in ingest_setups(outputs, spec, part=part).revolved}
+    shift = frames.apply_t(frames.FLIP_X, tuple(OFFSET))
+    assert got["R2"].centre[:2] == pytest.approx((50.0 + shift[0], 25.0 + shift[1]),
+                                                 abs=1e-3)
+    assert got["R2"].diameter == pytest.approx(12.0, abs=1e-3)
