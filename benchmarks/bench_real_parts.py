@@ -221,8 +221,22 @@ reason (the text after the feature's head)."""
 
 
 def reason_of(line: str) -> str:
-    """The class of a left-out line (``planning.left_out`` wording)."""
+    """The class of a left-out line (``planning.left_out`` wording): of its first reason
+    as loaded; where that is *orientation* or *setup* and the line says why the setups
+    tried do not reach the feature either (``...; in setup FLIPPED: <reason>``,
+    ``planning.setups.all_revolved_setups``), of the first setup's reason that is not
+    (what stops it once the part is turned), else the first."""
     body = line.split("): ", 1)[1] if "): " in line else line
+    loaded, *tried = re.split(r"; in setup [A-Z0-9_]+: ", body)
+    first = _reason_class(loaded)
+    if not tried or first not in ("orientation", "setup"):
+        return first
+    turned = [_reason_class(t) for t in tried]
+    return next((c for c in turned if c not in ("orientation", "setup")), first)
+
+
+def _reason_class(body: str) -> str:
+    """The class of one reason text: its first reason (up to ``; ``), else the whole."""
     first = body.split("; ", 1)[0]
     for text in (first, body):
         for name, needles in REASONS:
