@@ -6,10 +6,11 @@ Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_real_parts.py [options] [MO
 Without models: every ``../shared/ref/nist-step/*.stp``, ``../shared/ref/parts/*.step``,
 the DCX part and ``samples/parts/*.step``.  Per model and machine profile (the CMM
 ``samples/machines/cmm.toml`` to DMIS, the five-axis ``samples/machines/vmc-5axis-fanuc.toml``
-to Fanuc; a stand-in profile written into a temporary folder where the sample is not
-there yet, see :data:`STAND_INS`), the code path of ``probegen plan MODEL --all-revolved
---machine PROFILE -d DIALECT`` (``all_revolved_spec`` + ``plan_program``, then the
-dialect's text).  Prints per model and profile:
+to Fanuc, each with its ``[[setup]]`` FLIPPED; a stand-in profile written into a temporary
+folder where the sample is not there, see :data:`STAND_INS`), what ``probegen plan MODEL
+--all-revolved --machine PROFILE -d DIALECT -o DIR`` writes, by the same functions
+(``planning.setups.all_revolved_setups`` + ``plan_setups``, ``cli.plan.program_text``):
+one program per setup that has features (docs/setups.md).  Prints per model and profile:
 
 * *recognised*: the revolved features (``probegen.cad.revolved.revolved_features``);
 * *fillets*: a cylinder, sphere or torus of radius under :data:`FILLET_RADIUS` (a
@@ -17,17 +18,19 @@ dialect's text).  Prints per model and profile:
 * *narrow*: a bore narrower than the smallest bore of the rack's smallest stylus
   (``smallest_bore(machine.with_stylus(smallest))``);
 * *eligible*: the others, the issue's denominator;
-* *planned*: the features of the program, and of those the eligible ones; the share
+* *planned*: the features some setup's program measures (each once), and of those the
+  eligible ones (the line per model says how many each setup holds); the share
   planned / eligible (the goal: 90 % with the CMM, 80 % with the five-axis);
-* *left out by reason*: the eligible features left out, grouped by the reason of their
-  line (``probegen.planning.left_out``; :func:`reason_of`);
+* *left out by reason*: the eligible features no setup's program measures, grouped by
+  the reason of their line once every setup was tried (``probegen.planning.left_out``;
+  :func:`reason_of`); ``lost``: in no program and on no line (a bug);
 * the time: load and recognition, planning, emitting, wall clock (and CPU).
 
 Options: ``--profile cmm`` or ``--profile 5axis`` (default both), ``--vm`` runs each
-program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL --machine
-PROFILE`` does (the part at its nominal place, a perfect probe, the profile's rack and
-trunnion), ``--json PATH`` writes the figures, ``--notes`` prints every
-left-out line.
+setup's program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL
+--machine PROFILE --setup SETUP`` does (the part at its nominal place turned as the setup
+says, a perfect probe, the profile's rack and trunnion), ``--json PATH`` writes the
+figures, ``--notes`` prints every left-out line.
 """
 
 from __future__ import annotations
@@ -218,8 +221,22 @@ reason (the text after the feature's head)."""
 
 
 def reason_of(line: str) -> str:
-    """The class of a left-out line (``planning.left_out`` wording)."""
+    """The class of a left-out line (``planning.left_out`` wording): of its first reason
+    as loaded; where that is *orientation* or *setup* and the line says why the setups
+    tried do not reach the feature either (``...; in setup FLIPPED: <reason>``,
+    ``planning.setups.all_revolved_setups``), of the first setup's reason that is not
+    (what stops it once the part is turned), else the first."""
     body = line.split("): ", 1)[1] if "): " in line else line
+    loaded, *tried = re.split(r"; in setup [A-Z0-9_]+: ", body)
+    first = _reason_class(loaded)
+    if not tried or first not in ("orientation", "setup"):
+        return first
+    turned = [_reason_class(t) for t in tried]
+    return next((c for c in turned if c not in ("orientation", "setup")), first)
+
+
+def _reason_class(body: str) -> str:
+    """The class of one reason text: its first reason (up to ``; ``), else the whole."""
     first = body.split("; ", 1)[0]
     for text in (first, body):
         for name, needles in REASONS:
@@ -256,6 +273,8 @@ class Row:
     emit: str = ""
     vm: str = ""
     error: str = ""
+    setups: dict[str, int] = field(default_factory=dict)
+    """Planned features per setup (``AS LOADED``, ``FLIPPED``, ...)."""
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -266,22 +285,25 @@ class Row:
 
 def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
         simulate: Path | None) -> Row:
-    """Plan one loaded model with one profile and write its program; with ``simulate``
-    (the profile's file) run it on the virtual CMM or machine."""
+    """Plan one loaded model with one profile as ``probegen plan MODEL --all-revolved
+    --machine PROFILE -d DIALECT -o DIR`` does (the same functions:
+    ``planning.setups.all_revolved_setups``, ``plan_setups``, ``cli.plan.program_text``):
+    one program per setup; with ``simulate`` (the profile's file) run each on the virtual
+    CMM or machine with its setup."""
+    from probegen.cli.plan import program_text
     from probegen.dialects import get_dialect
     from probegen.errors import ProbegenError
-    from probegen.planning import plan_program
-    from probegen.planning.revolved_spec import all_revolved_spec
+    from probegen.planning.setups import all_revolved_setups, plan_setups
 
     row = Row(model.stem, case.key, load_s=load_s)
     fillets, narrow, eligible = eligibility(part, machine)
     row.recognised = len(fillets | narrow | eligible)
     row.fillets, row.narrow, row.eligible = len(fillets), len(narrow), len(eligible)
-    dialect = get_dialect(case.dialect)
+    runtime = get_dialect(case.dialect).RUNTIME_VARIABLES
     t0, c0 = time.perf_counter(), time.process_time()
     try:
-        spec, notes = all_revolved_spec(part, machine)
-        planned = plan_program(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
+        spec, notes = all_revolved_setups(part, machine)
+        setups = plan_setups(spec, runtime_variables=runtime, part=part)
     except ProbegenError as exc:
         row.plan_s, row.plan_cpu = time.perf_counter() - t0, time.process_time() - c0
         row.error = str(exc)
@@ -292,29 +314,59 @@ def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
         traceback.print_exc()
         return row
     row.plan_s, row.plan_cpu = time.perf_counter() - t0, time.process_time() - c0
-    ids = {int(p.spec.id[1:]) for p in planned.revolved if p.spec.id[1:].isdigit()}
-    row.planned, row.planned_eligible = len(planned.revolved), len(ids & eligible)
-    row.touches = sum(len(p.normals) for p in planned.revolved)
-    row.notes = list(notes)
-    row.left_out = dict(sorted(Counter(
-        reason_of(n) for n in notes if feature_id(n) in eligible).items()))
+    count(row, setups, notes, eligible)
     t1 = time.perf_counter()
+    texts = []
     try:
-        text = dialect.generate(planned.program)
-        row.emit = f"{len(text.splitlines())} lines, {time.perf_counter() - t1:.1f} s"
+        for _sp, planned in setups:
+            texts.append(program_text(case.dialect, planned, notes))
     except ProbegenError as exc:
-        row.emit = f"refused: {str(exc)[:70]}"
+        row.emit = f"refused ({setups[len(texts)][0].name}): {str(exc)[:70]}"
         return row
+    lines = " + ".join(str(len(x.splitlines())) for x in texts)
+    names = f" ({', '.join(sp.name for sp, _ in setups)})" if len(setups) > 1 else ""
+    row.emit = f"{lines} lines{names}, {time.perf_counter() - t1:.1f} s"
     if simulate is not None:
-        row.vm = simulate_program(model, text, case, simulate, row.touches)
+        said = [simulate_program(model, text, case, simulate,
+                                 sum(len(p.normals) for p in planned.revolved),
+                                 sp.setup.name if sp.setup is not None else None)
+                for text, (sp, planned) in zip(texts, setups, strict=True)]
+        alarms = [s for s in said if s.startswith("ALARM")]
+        row.vm = (alarms[0] if len(said) == 1 else "; ".join(alarms)) if alarms else \
+            "; ".join(s for s in said if s != "no alarm") or "no alarm"
     return row
 
 
+def count(row: Row, setups: Any, notes: tuple[str, ...], eligible: set[int]) -> None:
+    """Fill ``row``'s planned, touches, per-setup and left-out figures from the setups'
+    planned programs and the notes: a feature is planned when some setup's program
+    measures it (once, however many programs name it), left out when none does, by the
+    reason of its line; an eligible feature in no program and on no line is counted
+    ``lost`` (a bug to look at)."""
+    planned_ids: dict[str, str] = {}
+    for sp, planned in setups:
+        for p in planned.revolved:
+            planned_ids.setdefault(p.spec.id, sp.name)
+        row.touches += sum(len(p.normals) for p in planned.revolved)
+    ids = {int(f[1:]) for f in planned_ids if f[1:].isdigit()}
+    row.planned, row.planned_eligible = len(planned_ids), len(ids & eligible)
+    row.setups = dict(Counter(planned_ids.values()))
+    row.notes = list(notes)
+    noted = {feature_id(n) for n in notes}
+    reasons = Counter(reason_of(n) for n in notes
+                      if feature_id(n) in eligible and feature_id(n) not in ids)
+    lost = len(eligible - ids - noted)
+    if lost:
+        reasons["lost"] = lost
+    row.left_out = dict(sorted(reasons.items()))
+
+
 def simulate_program(model: Path, text: str, case: ProfileCase, profile: Path,
-                     touches: int) -> str:
+                     touches: int, setup: str | None = None) -> str:
     """The program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL
-    --machine PROFILE`` runs it (the part at its nominal place, a perfect probe, the
-    profile's rack and trunnion): ``no alarm``, or the alarm or error."""
+    --machine PROFILE [--setup SETUP]`` runs it (the part at its nominal place, turned as
+    the setup says, a perfect probe, the profile's rack and trunnion): ``no alarm``, or
+    the alarm or error (prefixed with the setup's name for a setup's program)."""
     import contextlib
     import io
 
@@ -326,16 +378,19 @@ def simulate_program(model: Path, text: str, case: ProfileCase, profile: Path,
         said = io.StringIO()
         with contextlib.redirect_stderr(said), contextlib.redirect_stdout(said):
             code = cli(["-q", "sim", str(program), "--part", str(model), "--machine",
-                        str(profile), "-o", str(Path(tmp) / "sim.log")])
+                        str(profile), "-o", str(Path(tmp) / "sim.log"),
+                        *(["--setup", setup] if setup else [])])
     out = said.getvalue()
+    where = f"[{setup}] " if setup else ""
     alarm = re.search(r"stopped on alarm (.*)", out)
     if alarm:
-        return f"ALARM {alarm[1][:80]}"
+        return f"ALARM {where}{alarm[1][:80]}"
     if code:
-        return f"ALARM sim exit {code}: {' '.join(out.split())[:80]}"
+        return f"ALARM {where}sim exit {code}: {' '.join(out.split())[:80]}"
     made = re.search(r"\((\d+) touches\)", out)
     count = int(made[1]) if made else -1
-    return "no alarm" + ("" if count == touches else f" ({count} of {touches} touches)")
+    return "no alarm" + ("" if count == touches
+                         else f" ({where}{count} of {touches} touches)")
 
 
 # ------------------------------------------------------------------ tables
@@ -371,7 +426,7 @@ def table(rows: list[Row]) -> str:
         out.append(f"| **all {len(mine)}** | {key} | {sum(r.recognised for r in mine)} | "
                    f"{sum(r.fillets for r in mine)} | {sum(r.narrow for r in mine)} | "
                    f"{eligible} | {sum(r.planned for r in mine)} ({planned}) | {share} | "
-                   + ", ".join(f"{k} {v}" for k, v in sorted(reasons.items()))
+                   + (", ".join(f"{k} {v}" for k, v in sorted(reasons.items())) or "-")
                    + f" | {sum(r.touches for r in mine)} | {sum(r.load_s for r in mine):.1f} | "
                    f"{sum(r.plan_s for r in mine):.1f} ({sum(r.plan_cpu for r in mine):.1f}) "
                    f"| |")
@@ -430,7 +485,9 @@ def main(argv: list[str]) -> int:
                 print(f"{row.model} [{case.key}]: {row.recognised} recognised, "
                       f"{row.eligible} eligible, {row.planned} planned "
                       f"({row.planned_eligible} eligible, {share}); left out: "
-                      f"{left_out_text(row)}; plan {row.plan_s:.1f} s; "
+                      f"{left_out_text(row)}; by setup: "
+                      f"{', '.join(f'{k} {v}' for k, v in row.setups.items()) or '-'}; "
+                      f"plan {row.plan_s:.1f} s; "
                       f"{row.error or row.emit} {row.vm}", flush=True)
                 for n in row.notes if args.notes else ():
                     print(f"  {n[:300]}")

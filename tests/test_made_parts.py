@@ -227,5 +227,17 @@ def test_benchmark_counts_fillets_narrow_bores_and_reasons(
         "R67 boss D50.000 (cylinder, faces 139): no open end to approach it from":
             "not accessible",
         "R5 thing": "other",
+        # after the setups were tried: what stops it in the setup, where that is not an
+        # orientation itself (planning.setups.all_revolved_setups)
+        "R24 torus D24.000 tube D4.000 (torus, faces 61): faces down: every touch goes up, "
+        "under material: needs an orientation or a setup: add a [[setup]] to the machine "
+        "profile (none of its setups FLIPPED reaches it) [x]; in setup FLIPPED: no touch "
+        "can be reached safely: no room: the stylus shank meets face 49": "collision",
+        "R21 bore D4.000 (cylinder, faces 58): tilt 150.0 deg: beyond the A axis's range "
+        "-110..110: needs a setup: add a [[setup]] to the machine profile (none of its "
+        "setups FLIPPED reaches it); in setup FLIPPED: axis at A 30.0 B 0.0: beyond the "
+        "A axis's range": "orientation",
+        "R16 boss D4.000 (cylinder, faces 53): arc too short: the longest arc on the faces "
+        "is 1.297 mm; in setup FLIPPED: no room": "arc too short",
     }
     assert {line: bench.reason_of(line) for line in lines} == lines

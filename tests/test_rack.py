@@ -41,7 +41,11 @@ def edited(tmp: Path, source: Path, *pairs: tuple[str, str]) -> Path:
 
 def test_cmm_sample_has_a_rack_of_four_and_a_ph10_head() -> None:
     m = load_profile(CMM)
-    assert m.dialect == "dmis" and m.tilt is None and m.setups == ()
+    assert m.dialect == "dmis" and m.tilt is None
+    # one setup: the part turned over about X (docs/setups.md), with its fixture note
+    assert m.setups == (NamedSetup("FLIPPED", frames.FLIP_X, (0.0, 0.0, 0.0),
+                                   "part turned over about X, top face down on parallels; "
+                                   "align at the datum again"),)
     assert [(s.label, s.ball_diameter, s.shank_diameter, s.length, s.tool_number)
             for s in m.rack] == [("D1", 1.0, 0.7, 20.0, 0), ("D2", 2.0, 1.4, 30.0, 0),
                                  ("D3", 3.0, 2.0, 40.0, 0), ("D6", 6.0, 4.5, 50.0, 0)]
@@ -62,6 +66,8 @@ def test_five_axis_sample_has_a_tilt_and_three_tools() -> None:
     assert [(s.label, s.ball_diameter, s.tool_number) for s in m.styli()] == [
         ("D6", 6.0, 20), ("D3", 3.0, 21), ("D2", 2.0, 22)]
     assert m.stylus == m.rack[0] and m.probe.tool_number == 20
+    assert [(s.name, s.rotation, s.origin) for s in m.setups] == [
+        ("FLIPPED", frames.FLIP_X, (0.0, 0.0, 0.0))]
 
 
 def test_profile_without_the_new_tables_is_as_before() -> None:
@@ -93,13 +99,14 @@ def test_inch_profile_converts_every_length(tmp_path: Path) -> None:
     assert d1.length == pytest.approx(20.0 * MM_PER_INCH)
     assert m.head is not None and m.head.step == 7.5  # angles are not lengths
     assert m.head.body_diameter == pytest.approx(14.0 * MM_PER_INCH)
-    assert m.setups[0].origin == pytest.approx((MM_PER_INCH, 2 * MM_PER_INCH,
+    assert [s.name for s in m.setups] == ["FLIPPED", "SIDE"]
+    assert m.setups[1].origin == pytest.approx((MM_PER_INCH, 2 * MM_PER_INCH,
                                                 0.5 * MM_PER_INCH))
     assert m.stylus.label == "D3"  # the [probe] stylus still found in the converted rack
 
 
 def test_setups_by_rotation_or_euler_angles(tmp_path: Path) -> None:
-    path = edited(tmp_path, CMM, ("[feeds]", '''[[setup]]
+    path = edited(tmp_path, CMM, ('name = "FLIPPED"', 'name = "SAMPLE"'), ("[feeds]", '''[[setup]]
 name = "FLIPPED"
 rotation = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
 note = "part turned over about X, datum face B on the table"
@@ -110,7 +117,8 @@ euler_zxz = [90.0, 90.0, 0.0]
 origin = [10.0, 0.0, 5.0]
 
 [feeds]'''))
-    flipped, side = load_profile(path).setups
+    sample, flipped, side = load_profile(path).setups
+    assert sample.name == "SAMPLE"  # the sample's own, renamed
     assert flipped == NamedSetup("FLIPPED", frames.FLIP_X, (0.0, 0.0, 0.0),
                                  "part turned over about X, datum face B on the table")
     assert side.rotation == ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
@@ -124,16 +132,17 @@ origin = [10.0, 0.0, 5.0]
     (("step = 7.5", "step = 7.0"), r"head\.b: expected \[low, high\] on the head's 7 deg"),
     (("a = [0.0, 105.0]", "a = [15.0, 105.0]"), r"head\.a: .*low <= 0 <= high"),
     (("b = [-180.0, 180.0]", "b = [-400.0, 180.0]"), r"head\.b: .*-360 <= low"),
+    # the setup added is the profile's second (the sample declares FLIPPED)
     (("[feeds]", '[[setup]]\nname = "side"\neuler_zxz = [0, 90, 0]\n[feeds]'),
-     r"setup\[0\]\.name: expected 1-16 of A-Z"),
+     r"setup\[1\]\.name: expected 1-16 of A-Z"),
     (("[feeds]", '[[setup]]\nname = "S"\n[feeds]'),
-     r"setup\[0\]\.rotation: expected exactly one of rotation, euler_zxz, found none"),
+     r"setup\[1\]\.rotation: expected exactly one of rotation, euler_zxz, found none"),
     (("[feeds]", '[[setup]]\nname = "S"\nrotation = [[1, 0], [0, 1]]\n[feeds]'),
-     r"setup\[0\]\.rotation: expected 3 rows of 3 numbers"),
+     r"setup\[1\]\.rotation: expected 3 rows of 3 numbers"),
     (("[feeds]", '[[setup]]\nname = "S"\neuler_zxz = [0, 90, 0]\nnote = "a\\nb"\n[feeds]'),
-     r"setup\[0\]\.note: expected one line"),
+     r"setup\[1\]\.note: expected one line"),
     (("[feeds]", '[[setup]]\nname = "S"\neuler_zxz = [0, 90, 0]\nturn = 1\n[feeds]'),
-     r"setup\[0\]\.turn: unknown key"),
+     r"setup\[1\]\.turn: unknown key"),
     (("[head]", "[head]\nc = [0.0, 90.0]"), r"head\.c: unknown key"),
 ])
 def test_cmm_profile_checks(tmp_path: Path, pair: tuple[str, str], message: str) -> None:

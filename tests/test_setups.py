@@ -66,6 +66,16 @@ at = [65.0, 30.0, 5.0]           # the D10 bore from the bottom, 15 deep: faces 
 tolerance = {{ diameter = [-0.01, 0.01], position = 0.02 }}
 {extra}'''
 OFFSET = np.array([0.004, -0.003, 0.002])
+
+
+def five_without_setups() -> str:
+    """The five-axis sample profile's text without its ``[[setup]]`` block (the sample
+    declares ``FLIPPED``, with a note of its own): the tests add their own setups."""
+    text = FIVE.read_text(encoding="utf-8")
+    start = text.index("# The setups the operator may turn the part into")
+    end = text.index("[feeds]", start)
+    assert "[[setup]]" in text[start:end] and "[[setup]]" not in text[end:]
+    return text[:start] + text[end:]
 """Where the part really lies on the table, off its nominal place (table frame), mm."""
 
 
@@ -86,7 +96,7 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     each (``spec.toml``, ``nosetup.toml``)."""
     tmp = tmp_path_factory.mktemp("setups")
     block(tmp / "part.step")
-    base = FIVE.read_text(encoding="utf-8")
+    base = five_without_setups()
     (tmp / "five.toml").write_text(base + FLIPPED, encoding="utf-8")
     (tmp / "five0.toml").write_text(base, encoding="utf-8")
     (tmp / "spec.toml").write_text(SPEC.format(profile="five.toml", extra=""),
@@ -138,7 +148,7 @@ def test_a_spec_forces_a_setup_and_an_unknown_one_is_refused(folder: Path) -> No
 
 
 def test_a_setup_with_an_origin_is_refused(folder: Path) -> None:
-    base = FIVE.read_text(encoding="utf-8")
+    base = five_without_setups()
     (folder / "five_origin.toml").write_text(
         base + FLIPPED + "origin = [0.0, 60.0, 40.0]\n", encoding="utf-8")
     (folder / "origin.toml").write_text(SPEC.format(profile="five_origin.toml", extra=""),
@@ -299,7 +309,7 @@ def test_a_setup_feature_may_need_a_tilt_too(folder: Path) -> None:
     from probegen.evaluate.setups import ingest_setups
     from probegen.planning.identity import planned_touches
 
-    (folder / "five_side.toml").write_text(FIVE.read_text(encoding="utf-8") + SIDE,
+    (folder / "five_side.toml").write_text(five_without_setups() + SIDE,
                                            encoding="utf-8")
     (folder / "side.toml").write_text(SPEC.format(profile="five_side.toml", extra=""),
                                       encoding="utf-8")
@@ -405,3 +415,51 @@ def test_a_spec_all_in_one_setup_ingests_in_part_coordinates(folder: Path,
                  str(folder / "bottom.toml"), "--setup", "FLIPPED", "-o", str(log)]) == 0
     (bottom,) = ingest_setups([log], spec).revolved
     assert bottom.centre[:2] == pytest.approx((70.0, 30.0), abs=1e-3)
+
+
+ODD = REPO / "samples" / "parts" / "odd_angle.step"
+SAMPLES = {"fanuc": FIVE, "dmis": REPO / "samples" / "machines" / "cmm.toml"}
+
+
+@pytest.mark.parametrize("dialect", ["fanuc", "dmis"])
+def test_the_sample_profiles_measure_a_face_down_hole_in_their_flipped_setup(
+        tmp_path: Path, dialect: str) -> None:
+    """``plan --all-revolved`` on odd_angle.step with each sample profile as is (its
+    ``[[setup]]`` FLIPPED): the D12 hole that opens downwards at (50, 25) goes to the
+    FLIPPED program (no head index nor tilt reaches it as loaded); both programs run on
+    the virtual machine / CMM with the part turned as the setup says and off by OFFSET
+    (table frame).  Five-axis: the logs ingested together give the hole in part
+    coordinates, off by Rᵀ·OFFSET, to 1 µm; CMM: the CMM reports it in the setup's
+    frame, at R·(50, 25) + OFFSET."""
+    from probegen import cad
+    from probegen.cli.plan import program_text
+    from probegen.evaluate.setups import ingest_setups
+    from probegen.machine.profile import load_profile
+    from probegen.planning.setups import all_revolved_setups
+    from probegen.results import read_dmis_output
+
+    part = cad.load_part(ODD)
+    spec, notes = all_revolved_setups(part, load_profile(SAMPLES[dialect]))
+    setups = plan_setups(spec, runtime_variables=dialect == "fanuc", part=part)
+    assert [(sp.name, sp.features) for sp, _ in setups][1] == ("FLIPPED", ("R2",))
+    assert not any(n.startswith("R2 ") for n in notes)
+    outputs = []
+    for sp, planned in setups:
+        program = tmp_path / f"{sp.name.replace(' ', '_')}.{'nc' if dialect == 'fanuc' else 'dmi'}"
+        program.write_text(program_text(dialect, planned, notes), encoding="ascii")
+        log = program.with_suffix(".log")
+        args = ["-q", "sim", str(program), "--part", str(ODD), "--machine",
+                str(SAMPLES[dialect]), "--offset", *(str(v) for v in OFFSET), "-o", str(log)]
+        assert main(args + (["--setup", sp.name] if sp.setup else [])) == 0, sp.name
+        outputs.append(log)
+    if dialect == "dmis":
+        (fa,) = read_dmis_output(outputs[1]).features
+        assert fa.name == "R2"
+        assert fa.position[:2] == pytest.approx((50.0 + OFFSET[0], -25.0 + OFFSET[1]),
+                                                abs=1e-3)
+        return
+    got = {r.feature: r for r in ingest_setups(outputs, spec, part=part).revolved}
+    shift = frames.apply_t(frames.FLIP_X, tuple(OFFSET))
+    assert got["R2"].centre[:2] == pytest.approx((50.0 + shift[0], 25.0 + shift[1]),
+                                                 abs=1e-3)
+    assert got["R2"].diameter == pytest.approx(12.0, abs=1e-3)

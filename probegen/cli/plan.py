@@ -355,9 +355,7 @@ def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
     """``plan -o``: the planned program in each dialect of ``-d`` (default: the spec's),
     written as ``compile`` writes it (inline), into ``-o``; the features left out are
     listed with their reasons in a comment block at its head."""
-    from probegen import ir
     from probegen.dialects import get_dialect
-    from probegen.planning.left_out import header_comments
     from probegen.planning.setups import plan_setups, setup_file
 
     names = args.dialect or [spec.dialect]
@@ -368,14 +366,25 @@ def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
         setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
         first = _target(args.output, stem, dialect.EXTENSION, len(names))
         for k, (sp, planned) in enumerate(setups):
-            program = planned.program
-            program = ir.Program(program.setup, (*header_comments(left_out), *program.body))
             target = Path(setup_file(str(first), sp, k == 0))
-            text = get_dialect(name).generate(program)  # labels start afresh per program
-            write_file(target, text, f"the {name} program",
+            write_file(target, program_text(name, planned, left_out), f"the {name} program",
                        encoding="ascii")
             print(f"wrote {target}" + (f" (setup {sp.name}: {' '.join(sp.features)})"
                                        if len(setups) > 1 else ""))
+
+
+def program_text(name: str, planned: Any, left_out: tuple[str, ...]) -> str:
+    """The text of one planned program (a setup's) as ``plan -o`` writes it in dialect
+    ``name``: the features left out, with their reasons, in a comment block at its head;
+    a fresh dialect instance per program (its labels start afresh).  Also
+    benchmarks/bench_real_parts.py's."""
+    from probegen import ir
+    from probegen.dialects import get_dialect
+    from probegen.planning.left_out import header_comments
+
+    program = planned.program
+    program = ir.Program(program.setup, (*header_comments(left_out), *program.body))
+    return str(get_dialect(name).generate(program))
 
 
 def _sphere_points(args: argparse.Namespace) -> int:

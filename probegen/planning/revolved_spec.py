@@ -47,13 +47,15 @@ KIND_OF_TYPE = {"cylinder": "cylinder", "cone": "cone", "sphere": "sphere", "tor
 
 
 def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
-                 check: bool = True) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
+                 check: bool = True, faces: frozenset[int] | None = None
+                 ) -> tuple[tuple[RevolvedSpec, ...], tuple[str, ...]]:
     """A spec feature for every revolved feature of a part that some orientation of the
     machine reaches and that plans with some stylus of the rack (default sections, 8
     points; :func:`probegen.planning.oriented.plan_oriented`) and, with ``check``, whose
     moves clear the collision check on their own in its frame (:func:`check_alone`); a
     line for each one left out with the reason
-    (:func:`probegen.planning.left_out.revolved_left_out`)."""
+    (:func:`probegen.planning.left_out.revolved_left_out`); with ``faces``, only the
+    features that have a face among them (the others neither planned nor noted)."""
     from probegen.cad.revolved import revolved_features
     from probegen.planning.left_out import revolved_left_out
     from probegen.planning.styli import smallest_stylus
@@ -62,6 +64,8 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
     notes: list[str] = []
     least = smallest_bore(machine.with_stylus(smallest_stylus(machine)))
     for f in revolved_features(part):
+        if faces is not None and faces.isdisjoint(f.faces):
+            continue
         fid = f"R{f.id}"
         if f.type not in KIND_OF_TYPE or not (f.accessible or reorientable(f, machine)):
             notes.append(revolved_left_out(f, part, machine, f.reason, least))

@@ -171,7 +171,9 @@ def reaches(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
 
 def assign(spec: Spec, part: Part | None) -> dict[str, int]:
     """The setup of each spec feature (0: as loaded, k: the profile's k-th), by id (see
-    the module docstring for the rule).
+    the module docstring for the rule; a feature whose ``setup`` is :data:`AS_LOADED`,
+    as :func:`all_revolved_setups` marks those it planned as loaded, stays as loaded
+    without a second trial).
 
     Raises:
         SpecError: a forced setup the profile does not have, or a setup with an origin.
@@ -182,6 +184,8 @@ def assign(spec: Spec, part: Part | None) -> dict[str, int]:
         out[feature.id] = 0
         if not isinstance(feature, RevolvedSpec) or not machine.setups:
             continue
+        if feature.setup == AS_LOADED:
+            continue  # all_revolved_setups: planned as loaded already
         if feature.setup is not None:
             k, s = setup_named(machine, feature.setup)
             check_origin(machine, k, s)
@@ -302,6 +306,8 @@ def plan_setups(spec: Spec, *, runtime_variables: bool, part: Part | None,
     return tuple(out)
 
 
+ASKS = re.compile(r"\ba setup\b|\bno orientation\b|\bneeds an orientation\b")
+"""A left-out line that a turn of the part might answer (the setups' reasons follow it)."""
 HINT = "add a [[setup]] to the machine profile"
 """What a reason that asks for a setup adds: the profile key."""
 
@@ -324,11 +330,16 @@ def all_revolved_setups(part: Part, machine: MachineProfile
                         ) -> tuple[Spec, tuple[str, ...]]:
     """``plan --all-revolved`` with setups: the features of
     :func:`probegen.planning.revolved_spec.all_revolved_spec` (as loaded), then for each
-    ``[[setup]]`` in order the recognised features left out as loaded that the part
-    turned so brings within reach (:func:`probegen.planning.revolved_spec.all_revolved`
-    on ``part.turned(Rᵀ)``), each with ``setup = NAME`` and the id it has as loaded; the
-    notes of the features still left out, the profile key named where they ask for a
-    setup (:func:`setup_hint`); a profile without setups: exactly
+    ``[[setup]]`` in order the recognised features left out as loaded (and by the setups
+    before it) that the part turned so brings within reach
+    (:func:`probegen.planning.revolved_spec.all_revolved` on ``part.turned(Rᵀ)``, those
+    features only), each with ``setup = NAME`` and the id it has as loaded (those as
+    loaded with ``setup =`` :data:`AS_LOADED`: :func:`assign` need not try them again);
+    the notes of
+    the features still left out, the profile key named where they ask for a setup
+    (:func:`setup_hint`), each followed by why every setup that was tried does not reach
+    it where the line as loaded asks for a setup or an orientation (``...; in setup
+    FLIPPED: <reason>``); a profile without setups: exactly
     ``all_revolved_spec``'s."""
     from probegen.cad.revolved import revolved_features
     from probegen.planning.revolved_spec import all_revolved, all_revolved_spec
@@ -340,19 +351,47 @@ def all_revolved_setups(part: Part, machine: MachineProfile
     left = {n.split(" ", 1)[0] for n in notes}
     taken: set[str] = {f.id for f in spec.features}
     extra: list[RevolvedSpec] = []
+    why: dict[str, list[str]] = {}
     for k, s in enumerate(machine.setups, start=1):
         check_origin(machine, k, s)
         turned = table_part(part, s)
         assert turned is not None
-        found, _ = all_revolved(turned, machine, setup_clearance(part, s, spec.clearance_z))
+        faces = frozenset(face for face, fid in ids.items() if fid in left and fid not in taken)
+        if not faces:
+            break  # every feature is in a program already
+        found, missed = all_revolved(turned, machine,
+                                     setup_clearance(part, s, spec.clearance_z), faces=faces)
         for f in found:
             fid = ids.get(f.face or 0)
             if fid is None or fid in taken or fid not in left:
                 continue
             taken.add(fid)
             extra.append(replace(f, id=fid, setup=s.name))
-    kept = tuple(setup_hint(n, machine) for n in notes if n.split(" ", 1)[0] not in taken)
-    return replace(spec, features=(*spec.features, *extra)), kept
+        for fid, reason in _reasons(turned, ids, missed):
+            why.setdefault(fid, []).append(f"in setup {s.name}: {reason}")
+    kept = tuple("; ".join([setup_hint(n, machine),
+                            *(why.get(n.split(" ", 1)[0], []) if ASKS.search(n) else [])])
+                 for n in notes if n.split(" ", 1)[0] not in taken)
+    loaded = tuple(replace(f, setup=AS_LOADED) if isinstance(f, RevolvedSpec) else f
+                   for f in spec.features)
+    return replace(spec, features=(*loaded, *extra)), kept
+
+
+def _reasons(turned: Part, ids: dict[int, str], notes: tuple[str, ...]
+             ) -> list[tuple[str, str]]:
+    """The left-out lines of a setup's turned part as (the feature's id as loaded, the
+    reason: the line after its head ``R<n> kind D.. (type, faces ..): ``); lines of
+    features recognised otherwise on the turned part (no face in common) dropped."""
+    from probegen.cad.revolved import revolved_features
+
+    faces = {f"R{f.id}": f.faces for f in revolved_features(turned)}
+    out = []
+    for n in notes:
+        head, _, reason = n.partition("): ")
+        loaded = {ids[face] for face in faces.get(head.split(" ", 1)[0], ()) if face in ids}
+        if len(loaded) == 1 and reason:
+            out.append((loaded.pop(), reason))
+    return out
 
 
 def setup_file(target: str, sp: SetupProgram, first: bool) -> str:
