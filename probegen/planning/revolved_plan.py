@@ -25,6 +25,7 @@ from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.well_posed import free_fit, ill_posed, ill_posed_reason
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -315,23 +316,28 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     resolved = resolve_revolved(feature, part)
     sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
     errors: list[ProbegenError] = []
-    best: tuple[ResolvedRevolved, Rerouted] | None = None
+    free = free_fit(machine)
+    best: tuple[ResolvedRevolved, Rerouted, str] | None = None
     for k, candidate in enumerate(_candidates(resolved, part)):
         # other sections only with the retract that served the default ones best
         only = best[1].plan.sections[0].retract if k and best is not None else None
         safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
         if safe is None:
             continue
-        if best is None or _touches(safe.plan) > _touches(best[1].plan):
+        why = ill_posed(feature.kind, candidate.feature, safe.plan) if free else ""
+        if best is None or (not why, _touches(safe.plan)) > (not best[2],
+                                                              _touches(best[1].plan)):
             notes = safe.notes if not k else (
                 "default sections lose touches; measured at z = " + ", ".join(
                     f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
-            best = (candidate, replace(safe, notes=tuple(notes)))
-        if not safe.dropped:
+            best = (candidate, replace(safe, notes=tuple(notes)), why)
+        if not safe.dropped and not why:
             break
     if best is None:
         raise errors[0]
-    chosen, safe = best
+    chosen, safe, why = best
+    if why:
+        raise PlanningError(f"{feature.where}: {ill_posed_reason(feature.kind, why)}")
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 
