@@ -142,3 +142,21 @@ def test_a_real_part_cmm_program_runs_on_the_virtual_cmm(
                  "-o", str(tmp_path / "out.log")]) == 0
     touches = sum(len(p.normals) for p in planned.revolved)
     assert f"({touches} touches)" in capsys.readouterr().err
+
+
+def test_the_virtual_cmm_refuses_a_torus_in_two_tube_positions() -> None:
+    """Sixteen points on two tube angles lie on a family of tori: the virtual CMM says
+    so, as a CMM that fits freely must, instead of reporting one of them."""
+    from test_dmis_torus import placed, torus_program
+
+    from probegen.sim.cmm.interpreter import DmisProgramError, run_dmis
+
+    lines = torus_program("OUTER").replace("MEAS/TORUS,F(RG),24",
+                                           "MEAS/TORUS,F(RG),16").splitlines()
+    start, end = lines.index("MEAS/TORUS,F(RG),16"), lines.index("ENDMES")
+    block = lines[start + 1:end]
+    last = [k for k, line in enumerate(block) if line.startswith("PTMEAS")][15]
+    cut = lines[:start + 1] + block[:last + 1] + lines[end:]
+    with pytest.raises(DmisProgramError, match=r"F\(RG\): 16 points in two sections; a "
+                                               r"free torus fit needs three sections"):
+        run_dmis("\n".join(cut) + "\n", placed("OUTER"))

@@ -11,8 +11,8 @@ The rule (:func:`undetermined`), per kind, on the points and the feature's axis:
 
 * the fit's fewest points (:data:`MINIMUM_POINTS`);
 * a *level* is a group of points at one height along the axis (heights sorted, a gap
-  over :data:`LEVEL_GAP` starts a new level: a section of a tilted real part stays one
-  level);
+  over :data:`LEVEL_GAP` and over :data:`LEVEL_SHARE` of the height range starts a new
+  level: a section of a tilted real part stays one level);
 * circle: its points not on one line;
 * cylinder, cone: two levels (two sections: the points of one section lie on one
   circle, and one circle lies on many cylinders and cones);
@@ -40,8 +40,13 @@ MINIMUM_POINTS = {"circle": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7
 """Fewest points of each free least-squares fit (its unknowns: a cylinder's axis line
 and radius are five, a cone's six with the angle, a torus's seven)."""
 LEVEL_GAP = 0.05
-"""Two points further apart than this along the axis (mm), with no point between, are on
-two levels (sections)."""
+"""Two points further apart than this along the axis (mm), with no point between, may be
+on two levels (sections) ..."""
+LEVEL_SHARE = 0.1
+"""... when they are also further apart than this share of the points' whole height
+range: the touches of one section of a real part tilted off the nominal axis spread in
+height (2 deg on a 30 mm ring: 2 mm) and stay one level; the planner's sections are at
+least a fifth of the feature's extent apart."""
 TORUS_LEVELS = 3
 """Levels (tube positions) a torus needs."""
 LEVELS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": TORUS_LEVELS}
@@ -67,7 +72,8 @@ def levels(points: ArrayLike, axis: ArrayLike) -> list[int]:
     heights = np.sort(np.asarray(points, dtype=np.float64) @ unit(axis, what="axis"))
     if heights.size == 0:
         return []
-    cuts = np.flatnonzero(np.diff(heights) > LEVEL_GAP) + 1
+    gap = max(LEVEL_GAP, LEVEL_SHARE * float(heights[-1] - heights[0]))
+    cuts = np.flatnonzero(np.diff(heights) > gap) + 1
     return [len(group) for group in np.split(heights, cuts)]
 
 
@@ -95,14 +101,12 @@ def undetermined(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
     least = MINIMUM_POINTS[kind]
     if len(p) < least:
         return f"{_count(len(p), 'point')}; a free {kind} fit needs at least {least}"
-    if kind == "sphere" or axis is None:
-        axis = plane_normal(p)
     if kind == "circle":
         return _collinear(p)
-    counts = levels(p, axis)
+    counts = levels(p, plane_normal(p) if kind == "sphere" or axis is None else axis)
     need = LEVELS[kind]
     if len(counts) < need:
-        where = "one section" if len(counts) == 1 else f"{len(counts)} sections"
+        where = "one section" if len(counts) == 1 else f"{_count(len(counts), 'section')}"
         return (f"{_count(len(p), 'point')} in {where}; a free {kind} fit needs "
                 f"{_count(need, 'section')} ({WHY[kind]})")
     return ""
