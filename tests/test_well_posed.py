@@ -36,7 +36,7 @@ def test_one_section_does_not_determine_a_cone_a_cylinder_or_a_sphere() -> None:
     a second section (for a sphere: a pole touch) determines them."""
     one = ring(5.0, 2.0)
     for kind in ("cone", "cylinder", "sphere"):
-        assert "in one section; a free " + kind in undetermined(kind, one, Z)
+        assert "in one section: a free " + kind in undetermined(kind, one, Z)
     assert undetermined("cone", np.vstack([one, ring(4.0, 3.0)]), Z) == ""
     assert undetermined("cylinder", np.vstack([one, ring(5.0, 6.0, 3)]), Z) == ""
     pole = np.array([[0.0, 0.0, 7.0]])
@@ -157,6 +157,6 @@ def test_the_virtual_cmm_refuses_a_torus_in_two_tube_positions() -> None:
     block = lines[start + 1:end]
     last = [k for k, line in enumerate(block) if line.startswith("PTMEAS")][15]
     cut = lines[:start + 1] + block[:last + 1] + lines[end:]
-    with pytest.raises(DmisProgramError, match=r"F\(RG\): 16 points in two sections; a "
+    with pytest.raises(DmisProgramError, match=r"F\(RG\): 16 points in two sections: a "
                                                r"free torus fit needs three sections"):
         run_dmis("\n".join(cut) + "\n", placed("OUTER"))

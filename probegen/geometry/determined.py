@@ -94,20 +94,20 @@ def undetermined(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
             are taken along the normal of the points' best-fit plane.
 
     Returns:
-        ``""`` when determined, else a sentence such as "6 points in one section; a free
+        ``""`` when determined, else a sentence such as "6 points in one section: a free
         cone fit needs two sections (one circle lies on many cones)".
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     least = MINIMUM_POINTS[kind]
     if len(p) < least:
-        return f"{_count(len(p), 'point')}; a free {kind} fit needs at least {least}"
+        return f"{_count(len(p), 'point')}: a free {kind} fit needs at least {least}"
     if kind == "circle":
         return _collinear(p)
     counts = levels(p, plane_normal(p) if kind == "sphere" or axis is None else axis)
     need = LEVELS[kind]
     if len(counts) < need:
         where = "one section" if len(counts) == 1 else f"{_count(len(counts), 'section')}"
-        return (f"{_count(len(p), 'point')} in {where}; a free {kind} fit needs "
+        return (f"{_count(len(p), 'point')} in {where}: a free {kind} fit needs "
                 f"{_count(need, 'section')} ({WHY[kind]})")
     return ""
 
@@ -117,7 +117,7 @@ def _collinear(p: FloatArray) -> str:
     centred = p - p.mean(axis=0)
     spread = np.linalg.svd(centred, compute_uv=False)
     if spread[1] / np.sqrt(len(p)) < COLLINEAR:
-        return "the points lie on one line; a free circle fit needs them on an arc"
+        return "the points lie on one line: a free circle fit needs them on an arc"
     return ""
 
 

@@ -25,7 +25,7 @@ from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
-from probegen.planning.well_posed import free_fit, ill_posed, ill_posed_reason
+from probegen.planning.well_posed import IllPosedError, free_fit, ill_posed, ill_posed_reason
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -337,7 +337,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         raise errors[0]
     chosen, safe, why = best
     if why:
-        raise PlanningError(f"{feature.where}: {ill_posed_reason(feature.kind, why)}")
+        raise IllPosedError(f"{feature.where}: {ill_posed_reason(feature.kind, why)}")
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 

@@ -16,9 +16,15 @@ from __future__ import annotations
 
 from typing import Any
 
+from probegen.errors import PlanningError
 from probegen.geometry.determined import undetermined
 from probegen.machine.profile import MachineProfile
 from probegen.planning.revolved import FeaturePlan
+
+
+class IllPosedError(PlanningError):
+    """A revolved feature whose touches do not determine it, for a target that fits
+    freely (:func:`ill_posed_reason`)."""
 
 
 def fits_freely(dialect: str) -> bool:
