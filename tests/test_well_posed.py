@@ -160,3 +160,18 @@ def test_the_virtual_cmm_refuses_a_torus_in_two_tube_positions() -> None:
     with pytest.raises(DmisProgramError, match=r"F\(RG\): 16 points in two sections: a "
                                                r"free torus fit needs three sections"):
         run_dmis("\n".join(cut) + "\n", placed("OUTER"))
+
+
+def test_two_sections_of_a_degree_of_arc_fit_no_cone() -> None:
+    """metalboop front plate R22: a cone in two sections, each six touches on one degree
+    of arc, determined in theory; the free fit (condition 8e8) refuses it, so the
+    planner does."""
+    from probegen.geometry.determined import unfit
+
+    half = math.radians(30.0)
+    arcs = [ring(5.0 + h * math.tan(half), h, 6, arc=math.radians(1.0)) for h in (0.0, 1.0)]
+    points = np.vstack(arcs)
+    assert undetermined("cone", points, Z) == ""
+    assert unfit("cone", points, Z) != ""  # ill-conditioned, or off the nominal axis
+    wide = np.vstack([ring(5.0 + h * math.tan(half), h, 6, arc=math.pi) for h in (0.0, 1.0)])
+    assert unfit("cone", wide, Z) == ""

@@ -34,6 +34,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from probegen.errors import ProbegenError
+from probegen.geometry.fits import fit_circle_3d, fit_sphere
+from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry.fits_results import ConeFit, CylinderFit, TorusFit
 from probegen.geometry.frames import FloatArray, unit
 
 MINIMUM_POINTS = {"circle": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
@@ -124,3 +128,39 @@ def _collinear(p: FloatArray) -> str:
 def _count(n: int, word: str) -> str:
     names = {1: "one", 2: "two", 3: "three"}
     return f"{names.get(n, str(n))} {word}{'' if n == 1 else 's'}"
+
+
+def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
+    """Why the free fit of exact ``points`` (the ball centres a plan will record) fails,
+    or ``""``: the fit a CMM runs, started from ``axis``, refuses points that determine
+    the shape in theory but too weakly (two sections of a cone, each a degree of arc:
+    condition number 8e8), or converges to another shape than the nominal's axis.
+
+    Args:
+        kind: as :func:`undetermined`.
+        points: ``(n, 3)`` float, mm.
+        axis: the nominal axis (not used for a circle or a sphere).
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    try:
+        if kind == "circle":
+            fit_circle_3d(p)
+        elif kind == "sphere":
+            fit_sphere(p)
+        else:
+            found: CylinderFit | ConeFit | TorusFit
+            if kind == "cylinder":
+                found = fit_cylinder(p, axis, nearest=axis is not None)
+            elif kind == "cone":
+                found = fit_cone(p, axis, nearest=axis is not None)
+            else:
+                found = fit_torus(p, axis, nearest=axis is not None)
+            if axis is not None and abs(float(unit(found.axis) @ unit(axis))) < AXIS_AGREES:
+                return f"the free {kind} fit of the planned touches ends off the nominal axis"
+    except ProbegenError as exc:
+        return str(exc)
+    return ""
+
+
+AXIS_AGREES = 0.9998
+"""The cosine (1 deg) within which the fit of exact touches must find the nominal axis."""

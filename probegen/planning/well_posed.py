@@ -16,8 +16,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from probegen.errors import PlanningError
-from probegen.geometry.determined import undetermined
+from probegen.geometry.determined import undetermined, unfit
 from probegen.machine.profile import MachineProfile
 from probegen.planning.revolved import FeaturePlan
 
@@ -50,8 +52,15 @@ def ill_posed(kind: str, feature: Any, plan: FeaturePlan) -> str:
             in the plan's frame).
         plan: the planned touches (``PathPoint.contact`` of each touch).
     """
-    contacts = [p.contact for p in plan.path if p.normal is not None and p.contact is not None]
-    return undetermined(kind, contacts, feature.axis)
+    pairs = [(p.contact, p.normal) for p in plan.path
+             if p.normal is not None and p.contact is not None]
+    contacts = np.array([c for c, _ in pairs], dtype=np.float64).reshape(-1, 3)
+    why = undetermined(kind, contacts, feature.axis)
+    if why:
+        return why
+    # the ball centres the CMM records and fits: the contacts out along the normals
+    normals = np.array([n for _, n in pairs], dtype=np.float64)
+    return unfit(kind, contacts + plan.sections[0].ball * normals, feature.axis)
 
 
 def ill_posed_reason(kind: str, why: str) -> str:
