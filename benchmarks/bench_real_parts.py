@@ -204,6 +204,7 @@ def eligibility(part: Any, machine: Any) -> tuple[set[int], set[int], set[int]]:
 # ------------------------------------------------------------------ reasons
 
 REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("free fit", ("a free ",)),
     ("head grid", ("deg grid",)),
     ("orientation", ("not along the probe", "needs an orientation", "faces down",
                      "no orientation", "beyond the")),

@@ -226,6 +226,9 @@ def test_benchmark_counts_fillets_narrow_bores_and_reasons(
         "-110..110: needs a setup": "orientation",
         "R67 boss D50.000 (cylinder, faces 139): no open end to approach it from":
             "not accessible",
+        "R2 outer cone D8.000 (cone, faces 4): cone: 5 points in one section: a free "
+        "cone fit needs two sections (one circle lies on many cones): a CMM fits it "
+        "freely from the touches; where ...": "free fit",
         "R5 thing": "other",
         # after the setups were tried: what stops it in the setup, where that is not an
         # orientation itself (planning.setups.all_revolved_setups)

@@ -57,6 +57,11 @@ class Dialect:
     """Longest line the target accepts."""
     RUNTIME_VARIABLES: ClassVar[bool] = False
     """Whether the controller computes with variables at run time (``ir.Var``, ``Assign``)."""
+    FREE_FIT: ClassVar[bool] = False
+    """Whether the target fits each measured feature freely itself (a CMM's ``MEAS`` ...
+    ``ENDMES``), so a revolved feature's touches must determine it
+    (:func:`probegen.geometry.determined.undetermined`); not a Macro B control, whose log
+    probegen fits from the nominal."""
     LOCAL_FRAMES: ClassVar[bool] = False
     """Whether the language can translate its frame onto a measured feature."""
     PROFILE_LIMITS: ClassVar[bool] = True

@@ -77,6 +77,7 @@ class Dmis(Dialect):
     LINE_LENGTH: ClassVar[int] = 256
     PROFILE_LIMITS: ClassVar[bool] = False
     LOCAL_FRAMES: ClassVar[bool] = True
+    FREE_FIT: ClassVar[bool] = True
     UNITS_WORD: ClassVar[dict[str, str]] = {"mm": "MM", "inch": "INCH"}
     """The DMIS length unit word for each unit system."""
     FEED_UNIT: ClassVar[dict[str, tuple[str, float]]] = {"mm": ("MPM", 1e-3),

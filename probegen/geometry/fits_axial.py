@@ -131,16 +131,39 @@ def _start_torus(q: FloatArray, axis: FloatArray) -> tuple[Pose, FloatArray] | N
     as a circle in the ``(rho, z)`` half-plane."""
     rot = rotation_to_z(axis)
     local = q @ rot.T
-    ring = algebraic_circle(local[:, :2])
-    if ring is None:
+    best: tuple[float, FloatArray, tuple[FloatArray, float]] | None = None
+    for centre in _ring_centres(local):
+        rho = np.hypot(local[:, 0] - centre[0], local[:, 1] - centre[1])
+        meridian = np.column_stack([rho, local[:, 2]])
+        tube = algebraic_circle(meridian)
+        if tube is None:
+            continue
+        spread = float(np.ptp(np.hypot(*(meridian - tube[0]).T)))
+        if best is None or spread < best[0]:
+            best = (spread, centre, tube)
+    if best is None:
         return None
-    rho = np.hypot(local[:, 0] - ring[0][0], local[:, 1] - ring[0][1])
-    tube = algebraic_circle(np.column_stack([rho, local[:, 2]]))
-    if tube is None:
-        return None
-    (major, height), minor = tube
-    origin = rot.T @ np.array([ring[0][0], ring[0][1], height])
+    _, centre, ((major, height), minor) = best
+    origin = rot.T @ np.array([centre[0], centre[1], height])
     return Pose(origin, rot), np.array([major, minor])
+
+
+def _ring_centres(local: FloatArray) -> list[FloatArray]:
+    """Candidate centres of a torus's rings, its axis along local z: the one circle
+    through every point projected (right for full rings), and concentric circles whose
+    ``rho^2`` is a quadratic in z (``|p|^2 = 2 c . p + k0 + k1 z + k2 z^2``: exact for
+    three or fewer levels; the rings of one torus have different radii, and one circle
+    through partial arcs of several puts the centre off the axis)."""
+    out = []
+    xy, z = local[:, :2], local[:, 2]
+    ring = algebraic_circle(xy)
+    if ring is not None:
+        out.append(ring[0])
+    lhs = np.column_stack([2.0 * xy, np.ones(len(z)), z, z * z])
+    sol, *_ = np.linalg.lstsq(lhs, np.sum(xy * xy, axis=1), rcond=None)
+    if np.all(np.isfinite(sol)):
+        out.append(sol[:2])
+    return out
 
 
 Start = Callable[[FloatArray, FloatArray], tuple[Pose, FloatArray] | None]

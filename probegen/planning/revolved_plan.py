@@ -25,6 +25,7 @@ from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.well_posed import IllPosedError, free_fit, ill_posed, ill_posed_reason
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -316,7 +317,8 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     resolved = resolve_revolved(feature, part)
     sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
     errors: list[ProbegenError] = []
-    best: tuple[ResolvedRevolved, Rerouted] | None = None
+    free = free_fit(machine)
+    best: tuple[ResolvedRevolved, Rerouted, str] | None = None
     own = 0  # the errors of the feature's own sections (the first candidate)
     for k, candidate in enumerate(_candidates(resolved, part)):
         # other sections only with the retract that served the default ones best
@@ -325,18 +327,22 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         own = own if k else len(errors)
         if safe is None:
             continue
-        if best is None or _touches(safe.plan) > _touches(best[1].plan):
+        why = ill_posed(feature.kind, candidate.feature, safe.plan) if free else ""
+        if best is None or (not why, _touches(safe.plan)) > (not best[2],
+                                                              _touches(best[1].plan)):
             notes = safe.notes if not k else (
                 "default sections lose touches; measured at z = " + ", ".join(
                     f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
-            best = (candidate, replace(safe, notes=tuple(notes)))
-        if not safe.dropped:
+            best = (candidate, replace(safe, notes=tuple(notes)), why)
+        if not safe.dropped and not why:
             break
     if best is None:
         # the most permissive attempt's reason: the smallest retract on the feature's
         # own sections (a larger retract's "R > r + d" is not why a bore is left out)
         raise errors[own - 1 if own else 0]
-    chosen, safe = best
+    chosen, safe, why = best
+    if why:
+        raise IllPosedError(f"{feature.where}: {ill_posed_reason(feature.kind, why)}")
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 

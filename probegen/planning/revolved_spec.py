@@ -7,6 +7,7 @@ metrics table), with the planning of one feature re-exported from
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,6 +32,7 @@ from probegen.planning.revolved_plan import (
     top_z,
 )
 from probegen.planning.setup import make_setup
+from probegen.planning.well_posed import IllPosedError
 from probegen.spec.model import RevolvedSpec, Spec
 
 if TYPE_CHECKING:
@@ -73,7 +75,7 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
         spec = RevolvedSpec(fid, f"{part.path}: revolved feature {f.id}",
                             _spec_kind(f, part, machine), f.faces[0], None, None, 8, None)
         try:
-            planned = plan_oriented(spec, part, machine, clearance_z)
+            spec, planned = _plan_or_circle(spec, part, machine, clearance_z)
         except (PlanningError, ModelError, SpecError) as exc:
             notes.append(revolved_left_out(f, part, machine, str(exc), least))
             continue
@@ -87,6 +89,23 @@ def all_revolved(part: Part, machine: MachineProfile, clearance_z: float, *,
                 continue
         out.append(spec)
     return tuple(out), tuple(notes)
+
+
+def _plan_or_circle(spec: RevolvedSpec, part: Part, machine: MachineProfile,
+                    clearance_z: float) -> tuple[RevolvedSpec, OrientedPlan]:
+    """The spec feature and its plan; a cylinder whose touches a CMM cannot fit as one
+    (one section kept: :class:`~probegen.planning.well_posed.IllPosedError`) is measured
+    as a circle, as a short land is (:func:`_kind`)."""
+    try:
+        return spec, plan_oriented(spec, part, machine, clearance_z)
+    except IllPosedError as exc:
+        if spec.kind != "cylinder":
+            raise
+        circle = replace(spec, kind="circle")
+        try:
+            return circle, plan_oriented(circle, part, machine, clearance_z)
+        except PlanningError:
+            raise exc from None
 
 
 def _spec_kind(f: Any, part: Part, machine: MachineProfile) -> str:

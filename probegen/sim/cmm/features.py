@@ -40,7 +40,7 @@ from typing import Literal
 import numpy as np
 
 from probegen.errors import ProbegenError
-from probegen.geometry import minimum_zone
+from probegen.geometry import determined, minimum_zone
 from probegen.geometry.fits import (
     Circle3dFit,
     CylinderFit,
@@ -187,9 +187,23 @@ def _counts_text(kind: str) -> str:
 
 # ------------------------------------------------------------------------ measuring
 
-MINIMUM_POINTS = {"POINT": 1, "PLANE": 3, "CIRCLE": 3, "CYLNDR": 5, "SPHERE": 4, "CONE": 6,
-                  "TORUS": 7, "LINE": 2}
+SHAPES = {"CIRCLE": "circle", "CYLNDR": "cylinder", "SPHERE": "sphere", "CONE": "cone",
+          "TORUS": "torus"}
+"""The shape name (``geometry.fits_nominal``, ``geometry.determined``) of each sided type."""
+MINIMUM_POINTS = {"POINT": 1, "PLANE": 3, "LINE": 2} | {
+    kind: determined.MINIMUM_POINTS[shape] for kind, shape in SHAPES.items()}
 """Fewest points each measured type needs (those of the least-squares fits)."""
+
+
+def undetermined(nominal: DmisFeature, centres: FloatArray) -> str:
+    """Why the measured ball centres do not determine a circle, cylinder, sphere, cone or
+    torus in a free fit, as a CMM fits (:func:`probegen.geometry.determined.undetermined`:
+    a cone in one section, a sphere on one circle, a torus in two tube positions), or
+    ``""`` (also for the other types)."""
+    shape = SHAPES.get(nominal.kind)
+    if shape is None:
+        return ""
+    return determined.undetermined(shape, centres, nominal.vector)
 
 
 def fit_feature(nominal: DmisFeature, centres: FloatArray, vectors: FloatArray,
@@ -286,13 +300,9 @@ def _fit_offset_shape(nominal: DmisFeature, centres: FloatArray, radius: float) 
                    condition=condition)
 
 
-_SHAPES = {"CIRCLE": "circle", "CYLNDR": "cylinder", "SPHERE": "sphere", "CONE": "cone",
-           "TORUS": "torus"}
-
-
 def _nominal_shape(nominal: DmisFeature, grow: float) -> NominalShape:
     """The nominal of the surface the ball centres lie on (``grow`` inside it)."""
-    kind = _SHAPES[nominal.kind]
+    kind = SHAPES[nominal.kind]
     if kind == "cone":
         return NominalShape(kind, nominal.vector, 0.0, math.radians((nominal.size or 0.0) / 2),
                             grow)

@@ -74,6 +74,7 @@ from probegen.sim.cmm.features import (
     Vec3,
     arr,
     fit_feature,
+    undetermined,
     vec3,
 )
 from probegen.sim.cmm.measure import do_feat, do_meas, do_tol
@@ -391,6 +392,10 @@ def do_endmes(state: VmState, st: Statement) -> None:
     if found < MINIMUM_POINTS[nominal.kind]:
         raise state.error(f"MEAS/{nominal.kind} needs at least "
                           f"{MINIMUM_POINTS[nominal.kind]} points, found {found}")
+    why = undetermined(nominal, np.array(block.centres))
+    if why:
+        raise state.error(f"MEAS/{nominal.kind} F({nominal.name}): {why}; not reported as "
+                          "a measurement")
     try:
         actual = fit_feature(nominal, np.array(block.centres), np.array(block.vectors),
                              _ball_radius(state), state.compensation)

@@ -1,0 +1,166 @@
+"""Whether touch points determine a revolved feature in a *free* least-squares fit.
+
+A CMM (PC-DMIS, Calypso, the virtual CMM of :mod:`probegen.sim.cmm`) fits every measured
+feature freely: it does not know the nominal axis, apex or centre, the points alone must
+fix them.  probegen's own evaluation of a Macro B log fits from the nominal
+(:mod:`probegen.geometry.fits_nominal`), which serves on fewer points; a DMIS program
+must give the CMM points that determine the shape, else the CMM refuses the feature or
+reports one of the many shapes the points lie on.
+
+The rule (:func:`undetermined`), per kind, on the points and the feature's axis:
+
+* the fit's fewest points (:data:`MINIMUM_POINTS`);
+* a *level* is a group of points at one height along the axis (heights sorted, a gap
+  over :data:`LEVEL_GAP` and over :data:`LEVEL_SHARE` of the height range starts a new
+  level: a section of a tilted real part stays one level);
+* circle: its points not on one line;
+* cylinder, cone: two levels (two sections: the points of one section lie on one
+  circle, and one circle lies on many cylinders and cones);
+* sphere: two levels (a second section or a pole touch: one circle lies on many
+  spheres); a sphere's levels are taken along the normal of its points' best-fit plane,
+  so it needs no axis;
+* torus: :data:`TORUS_LEVELS` levels (three tube positions: two circles of a torus lie
+  on a family of tori).
+
+These are what the points must have for the fit to be determined at all, not a
+programmer's good practice (sections far apart, points spread around): the virtual CMM
+refuses what no CMM can fit, and the planner never writes it.
+
+Lengths in mm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from probegen.errors import ProbegenError
+from probegen.geometry.fits import fit_circle_3d, fit_sphere
+from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry.fits_results import ConeFit, CylinderFit, TorusFit
+from probegen.geometry.frames import FloatArray, unit
+
+MINIMUM_POINTS = {"circle": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
+"""Fewest points of each free least-squares fit (its unknowns: a cylinder's axis line
+and radius are five, a cone's six with the angle, a torus's seven)."""
+LEVEL_GAP = 0.05
+"""Two points further apart than this along the axis (mm), with no point between, may be
+on two levels (sections) ..."""
+LEVEL_SHARE = 0.1
+"""... when they are also further apart than this share of the points' whole height
+range: the touches of one section of a real part tilted off the nominal axis spread in
+height (2 deg on a 30 mm ring: 2 mm) and stay one level; the planner's sections are at
+least a fifth of the feature's extent apart."""
+TORUS_LEVELS = 3
+"""Levels (tube positions) a torus needs."""
+LEVELS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": TORUS_LEVELS}
+"""Levels each kind needs."""
+WHY = {
+    "cylinder": "one circle lies on many cylinders",
+    "cone": "one circle lies on many cones",
+    "sphere": "one circle lies on many spheres",
+    "torus": "two circles of a torus lie on a family of tori",
+}
+"""Why a kind needs more than one level, for the message."""
+COLLINEAR = 1e-3
+"""A ring whose points lie within this (mm) of one line fixes no circle."""
+
+
+def levels(points: ArrayLike, axis: ArrayLike) -> list[int]:
+    """The number of points on each level along ``axis``, lowest level first.
+
+    Args:
+        points: ``(n, 3)`` float, mm.
+        axis: ``(3,)``, the feature's axis (any length but zero).
+    """
+    heights = np.sort(np.asarray(points, dtype=np.float64) @ unit(axis, what="axis"))
+    if heights.size == 0:
+        return []
+    gap = max(LEVEL_GAP, LEVEL_SHARE * float(heights[-1] - heights[0]))
+    cuts = np.flatnonzero(np.diff(heights) > gap) + 1
+    return [len(group) for group in np.split(heights, cuts)]
+
+
+def plane_normal(points: FloatArray) -> FloatArray:
+    """The unit normal of the points' best-fit plane (the direction they spread least)."""
+    centred = points - points.mean(axis=0)
+    return np.asarray(np.linalg.svd(centred)[2][2], dtype=np.float64)
+
+
+def undetermined(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
+    """Why ``points`` do not determine a ``kind`` in a free least-squares fit, or ``""``.
+
+    Args:
+        kind: ``circle``, ``cylinder``, ``cone``, ``sphere`` or ``torus``.
+        points: ``(n, 3)`` float, the contact points (or the ball centres: they lie on
+            the offset surface, on the same levels), mm.
+        axis: the feature's axis (a circle's normal); ignored for a sphere, whose levels
+            are taken along the normal of the points' best-fit plane.
+
+    Returns:
+        ``""`` when determined, else a sentence such as "6 points in one section: a free
+        cone fit needs two sections (one circle lies on many cones)".
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    least = MINIMUM_POINTS[kind]
+    if len(p) < least:
+        return f"{_count(len(p), 'point')}: a free {kind} fit needs at least {least}"
+    if kind == "circle":
+        return _collinear(p)
+    counts = levels(p, plane_normal(p) if kind == "sphere" or axis is None else axis)
+    need = LEVELS[kind]
+    if len(counts) < need:
+        where = "one section" if len(counts) == 1 else f"{_count(len(counts), 'section')}"
+        return (f"{_count(len(p), 'point')} in {where}: a free {kind} fit needs "
+                f"{_count(need, 'section')} ({WHY[kind]})")
+    return ""
+
+
+def _collinear(p: FloatArray) -> str:
+    """Why points meant for a circle fix none (all within :data:`COLLINEAR` of a line)."""
+    centred = p - p.mean(axis=0)
+    spread = np.linalg.svd(centred, compute_uv=False)
+    if spread[1] / np.sqrt(len(p)) < COLLINEAR:
+        return "the points lie on one line: a free circle fit needs them on an arc"
+    return ""
+
+
+def _count(n: int, word: str) -> str:
+    names = {1: "one", 2: "two", 3: "three"}
+    return f"{names.get(n, str(n))} {word}{'' if n == 1 else 's'}"
+
+
+def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
+    """Why the free fit of exact ``points`` (the ball centres a plan will record) fails,
+    or ``""``: the fit a CMM runs, started from ``axis``, refuses points that determine
+    the shape in theory but too weakly (two sections of a cone, each a degree of arc:
+    condition number 8e8), or converges to another shape than the nominal's axis.
+
+    Args:
+        kind: as :func:`undetermined`.
+        points: ``(n, 3)`` float, mm.
+        axis: the nominal axis (not used for a circle or a sphere).
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    try:
+        if kind == "circle":
+            fit_circle_3d(p)
+        elif kind == "sphere":
+            fit_sphere(p)
+        else:
+            found: CylinderFit | ConeFit | TorusFit
+            if kind == "cylinder":
+                found = fit_cylinder(p, axis, nearest=axis is not None)
+            elif kind == "cone":
+                found = fit_cone(p, axis, nearest=axis is not None)
+            else:
+                found = fit_torus(p, axis, nearest=axis is not None)
+            if axis is not None and abs(float(unit(found.axis) @ unit(axis))) < AXIS_AGREES:
+                return f"the free {kind} fit of the planned touches ends off the nominal axis"
+    except ProbegenError as exc:
+        return str(exc)
+    return ""
+
+
+AXIS_AGREES = 0.9998
+"""The cosine (1 deg) within which the fit of exact touches must find the nominal axis."""
