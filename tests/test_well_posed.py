@@ -175,3 +175,18 @@ def test_two_sections_of_a_degree_of_arc_fit_no_cone() -> None:
     assert unfit("cone", points, Z) != ""  # ill-conditioned, or off the nominal axis
     wide = np.vstack([ring(5.0 + h * math.tan(half), h, 6, arc=math.pi) for h in (0.0, 1.0)])
     assert unfit("cone", wide, Z) == ""
+
+
+@pytest.mark.parametrize(("degrees", "refused"), [(30.0, False), (0.3, True)])
+def test_a_planned_free_fit_keeps_far_from_the_fits_limit(degrees: float,
+                                                           refused: bool) -> None:
+    """Exact touches on a 0.3 degree arc fit (condition about 2e6, under the fits' 1e8)
+    but are refused for planning: rounded and scattered they would not."""
+    from probegen.geometry.determined import PLANNED_CONDITION, unfit
+
+    t = np.radians(np.linspace(0.0, degrees, 8))
+    points = np.column_stack([20.0 * np.cos(t), 20.0 * np.sin(t), np.zeros_like(t)])
+    why = unfit("circle", points, None)
+    assert bool(why) is refused, why
+    if refused:
+        assert f"keeps below {PLANNED_CONDITION:.0e}" in why

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike
 from probegen.errors import ProbegenError
 from probegen.geometry.fits import fit_circle_3d, fit_sphere
 from probegen.geometry.fits_axial import fit_cone, fit_cylinder, fit_torus
+from probegen.geometry.fits_conditioning import CONDITION_LIMIT
 from probegen.geometry.fits_results import ConeFit, CylinderFit, TorusFit
 from probegen.geometry.frames import FloatArray, unit
 
@@ -144,9 +145,9 @@ def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     try:
         if kind == "circle":
-            fit_circle_3d(p)
+            condition = fit_circle_3d(p).condition
         elif kind == "sphere":
-            fit_sphere(p)
+            condition = fit_sphere(p).condition
         else:
             found: CylinderFit | ConeFit | TorusFit
             if kind == "cylinder":
@@ -157,9 +158,22 @@ def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
                 found = fit_torus(p, axis, nearest=axis is not None)
             if axis is not None and abs(float(unit(found.axis) @ unit(axis))) < AXIS_AGREES:
                 return f"the free {kind} fit of the planned touches ends off the nominal axis"
+            condition = found.condition
     except ProbegenError as exc:
         return str(exc)
+    if not condition <= PLANNED_CONDITION:
+        return (f"the free {kind} fit of the planned touches is ill-conditioned (condition "
+                f"number {condition:.1e}, a planned feature keeps below "
+                f"{PLANNED_CONDITION:.0e}): too short an arc or too close sections")
     return ""
+
+
+PLANNED_CONDITION = CONDITION_LIMIT / 100.0
+"""The largest condition number of the free fit of a planned feature's exact touches:
+a hundred times below the fits' own limit (``fits_conditioning.CONDITION_LIMIT``), as
+the touches come back rounded to the output's decimals and scattered by the probe, which
+moves a near-singular solution (NIST FTC 7's cone R146: the exact touches' fit passed
+the limit, the virtual CMM's fit of its recorded touches ended at 2.7e8)."""
 
 
 AXIS_AGREES = 0.9998
