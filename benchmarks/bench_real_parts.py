@@ -30,7 +30,9 @@ Options: ``--profile cmm`` or ``--profile 5axis`` (default both), ``--vm`` runs 
 setup's program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL
 --machine PROFILE --setup SETUP`` does (the part at its nominal place turned as the setup
 says, a perfect probe, the profile's rack and trunnion), ``--json PATH`` writes the
-figures, ``--notes`` prints every left-out line.
+figures, ``--notes`` prints every left-out line.  Every DMIS program's ``PTMEAS`` points
+are checked on the model (the setup's turned model for a setup's program): on it within
+1 um, with the vector pointing out of the material (``benchmarks/points_on_model.py``).
 """
 
 from __future__ import annotations
@@ -51,6 +53,9 @@ from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "benchmarks"))
+
+from points_on_model import PointsCheck, check_points  # noqa: E402
 
 SHARED = REPO.parent / "shared" / "ref"
 DCX = SHARED / "nist-ippdme/DCXpart/STEP_AP214/DaimlerChryslerTestPartAP214.stp"
@@ -273,6 +278,8 @@ class Row:
     plan_cpu: float = 0.0
     emit: str = ""
     vm: str = ""
+    points: str = ""
+    """The DMIS programs' points checked on the model (``points_on_model.py``)."""
     error: str = ""
     setups: dict[str, int] = field(default_factory=dict)
     """Planned features per setup (``AS LOADED``, ``FLIPPED``, ...)."""
@@ -327,6 +334,10 @@ def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
     lines = " + ".join(str(len(x.splitlines())) for x in texts)
     names = f" ({', '.join(sp.name for sp, _ in setups)})" if len(setups) > 1 else ""
     row.emit = f"{lines} lines{names}, {time.perf_counter() - t1:.1f} s"
+    if case.dialect == "dmis":
+        row.points = points_text([
+            check_points(text, part if sp.setup is None else part.turned(sp.setup.rotation))
+            for text, (sp, _) in zip(texts, setups, strict=True)])
     if simulate is not None:
         said = [simulate_program(model, text, case, simulate,
                                  sum(len(p.normals) for p in planned.revolved),
@@ -401,6 +412,19 @@ def left_out_text(row: Row) -> str:
     return ", ".join(f"{k} {v}" for k, v in row.left_out.items()) or "-"
 
 
+def points_text(checks: list[Any]) -> str:
+    """One text of the points checks of a model's DMIS programs
+    (``benchmarks/points_on_model.py``)."""
+    total = PointsCheck()
+    for c in checks:
+        total.points += c.points
+        total.off_model += c.off_model
+        total.inward += c.inward
+        total.unclassified += c.unclassified
+        total.worst = max(total.worst, c.worst)
+    return total.text()
+
+
 def table(rows: list[Row]) -> str:
     """The Markdown table, one line per model and profile, with totals per profile."""
     head = ("| model | profile | recognised | fillets | narrow bores | eligible | planned "
@@ -410,6 +434,8 @@ def table(rows: list[Row]) -> str:
     for r in rows:
         share = "-" if r.share is None else f"{100.0 * r.share:.0f} %"
         program = r.error and f"not planned: {r.error[:60]}" or r.emit
+        if r.points:
+            program += f"; {r.points}"
         if r.vm:
             program += f"; {r.vm}"
         out.append(f"| {r.model} | {r.profile} | {r.recognised} | {r.fillets} | {r.narrow} | "
@@ -489,7 +515,7 @@ def main(argv: list[str]) -> int:
                       f"{left_out_text(row)}; by setup: "
                       f"{', '.join(f'{k} {v}' for k, v in row.setups.items()) or '-'}; "
                       f"plan {row.plan_s:.1f} s; "
-                      f"{row.error or row.emit} {row.vm}", flush=True)
+                      f"{row.error or row.emit} {row.points} {row.vm}", flush=True)
                 for n in row.notes if args.notes else ():
                     print(f"  {n[:300]}")
     print()
