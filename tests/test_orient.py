@@ -158,8 +158,12 @@ def test_head_orientation_names_grid_and_range() -> None:
     assert not isinstance(o, str) and o.head == (90.0, -90.0)
     assert orient_name(o, 3) == "A90BM90"
     assert o.rotation == frames.frame_for((1.0, 0.0, 0.0))
-    off = orientation_for(machine, head_direction(37.3, 12.1))
-    assert off == "axis at A 37.3 B 12.1: not on the head's 7.5 deg grid: needs a setup"
+    near = orientation_for(machine, head_direction(37.3, 12.1))  # 1.8 deg off A37.5B15
+    assert not isinstance(near, str) and near.head == (37.5, 15.0)
+    assert near.exact == frames.frame_for(head_direction(37.3, 12.1))
+    off = orientation_for(machine, head_direction(86.25, 3.75))
+    assert off == ("axis at A 86.2 B 3.7: not on the head's 7.5 deg grid: the nearest index "
+                   "A82.5 B0 stands 5.3 deg off the axis, more than 3.75 deg: needs a setup")
     down = orientation_for(machine, (0.0, 0.0, -1.0))
     assert isinstance(down, str) and "beyond the head's A range 0..105" in down
     narrow = replace(machine, head=Head(b=(-90.0, 90.0)))
@@ -477,24 +481,30 @@ def test_a_bore_too_small_for_every_stylus_names_the_smallest(loaded: cad.Part) 
 @given(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.floats(-1.0, 1.0))
 def test_orientation_of_any_direction(x: float, y: float, z: float) -> None:
     """Any approach direction: the head's angles give it back, and the orientation is on
-    the grid with its frame's Z along it, or a reason."""
+    the grid with its frame's Z along it, or at the head's nearest index within the tilt
+    bound with the exact frame's Z along it, or a reason."""
     n = math.sqrt(x * x + y * y + z * z)
     if n < 1e-3:
         return
     a = (x / n, y / n, z / n)
     big_a, big_b = head_angles(a)
     assert 0.0 <= big_a <= 180.0 and -180.0 < big_b <= 180.0
-    if math.hypot(a[0], a[1]) > 1e-6:
-        assert np.allclose(head_direction(big_a, big_b), a, atol=1e-9)
+    if math.hypot(a[0], a[1]) > 1e-6:  # B within GRID_SNAP (1.7e-8 rad) of -180 is 180
+        assert np.allclose(head_direction(big_a, big_b), a, atol=2e-8)
     for kind in ("head", "tilt"):
         o = orientation_for(profile(kind), a)
         if isinstance(o, str):
             assert "needs a setup" in o or "add the B range" in o
             continue
+        assert np.allclose(np.asarray(o.plan_rotation)[:, 2], a, atol=1e-9)
         z_axis = np.asarray(o.rotation)[:, 2]
-        assert np.allclose(z_axis, a, atol=1e-9)
+        tilt = math.degrees(math.atan2(float(np.linalg.norm(np.cross(z_axis, a))),
+                                       float(np.dot(z_axis, a))))
+        assert tilt == pytest.approx(o.tilt, abs=1e-6) and o.tilt <= 3.75 + 1e-9
+        assert (o.exact is None) == (o.tilt == 0.0)
         if o.head is not None:
             assert all(abs(v / 7.5 - round(v / 7.5)) < 1e-9 for v in o.head)
+            assert np.allclose(z_axis, head_direction(*o.head), atol=1e-7)  # GRID_SNAP
 
 
 @settings(max_examples=examples(60))

@@ -27,6 +27,8 @@ _ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
 _SMALL = re.compile(r"inner radius ([\d.]+) mm: the safe circle R - r - d = [-\d.]+ mm: "
                     r"expected R > r \+ d")
 _HIT = re.compile(r"the stylus (ball|shank|holder)[^;]*?(?:into|of) face (\d+)")
+_TILTED = re.compile(r"at the nearest head index \w+ the stylus stands [\d.]+ deg off the "
+                     r"feature's axis")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
 LONGEST = 240
 """A planner's message longer than this (characters) is cut (a free-form face lists
@@ -109,6 +111,10 @@ def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
         return (f"arc too short: the longest arc of the section measured is {longest:.3f} "
                 f"mm, the ball D{2.0 * r:.3f} needs {2.0 * end:.3f} mm (its radius and the "
                 f"margin {end - r:.3f} mm at each end): a smaller stylus")
+    tilted = _TILTED.search(problem)
+    if tilted is not None and _HIT.search(problem):
+        rest = problem[tilted.end():].removeprefix(": it collides: ")
+        return f"{tilted[0]}: {collision_reason(rest)}"
     if "no touch can be reached safely" in problem or "collides" in problem:
         depth = _blind_depth(f, part)
         if depth is not None and depth < r + m:

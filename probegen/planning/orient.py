@@ -18,6 +18,12 @@ Conventions:
   ``A90B-90`` faces facing +X, ``A90B90`` faces facing -X, ``A90B180`` faces facing -Y.
   The DMIS dialect writes these angles as ``SNSDEF/PROBE,INDEX,POL,A,B,...``.  Both angles
   must lie on the head's ``step`` grid (within :data:`GRID_SNAP` deg) and in its ranges.
+  An approach between the grid's indexes is taken at the nearest index (both angles
+  snapped, within the ranges) when the stylus there stands at most
+  :func:`tilt_bound` (:data:`TILT_OF_STEP` of the step) off the feature's axis, as a
+  CMM programmer probes such a feature: the feature is planned in its own frame
+  (:attr:`Orientation.exact`, touches along its normals) and probed with the stylus
+  along the index's axis (:attr:`Orientation.rotation`).
 * A five-axis machine's tilted work plane (``machine.tilt``): the tilt angle is the
   angle of ``a`` from +Z (G68.2 ``J``), within ``tilt_range`` (either sign: the rotary axis
   turns the other half round), the rotary angle any (G68.2 ``I``).
@@ -30,7 +36,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Hashable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -38,7 +44,7 @@ import numpy as np
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.ir import frames
-from probegen.machine.profile import MachineProfile, Stylus
+from probegen.machine.profile import Head, MachineProfile, Stylus
 from probegen.planning.styli import pick_stylus as pick_stylus  # the one choice, re-exported
 
 if TYPE_CHECKING:
@@ -50,6 +56,13 @@ LEAST_GAP = 10.0
 """A frame's clearance level is at least this far above the turned part, mm."""
 EXACT_ORDER = 7
 """Up to this many (stylus, orientation) groups are ordered by trying every order."""
+TILT_OF_STEP = 0.5
+"""A feature whose axis lies between a head's indexes is probed at the nearest index when
+the stylus there stands at most this fraction of the head's step off the feature's axis
+(half the step: 3.75 deg on a 7.5 deg head, the most a snap of the tilt angle A alone
+leaves): the touches stay square to the feature's axis, the stylus is tilted from it.
+Farther off (both angles between steps near the horizontal: up to 5.3 deg) the feature
+is left out for a setup."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,15 +70,34 @@ class Orientation:
     """An orientation the machine takes: the frame's rotation and the machine's angles.
 
     Attributes:
-        rotation: the frame (:func:`probegen.ir.frames.frame_for` of the approach).
+        rotation: the frame (:func:`probegen.ir.frames.frame_for` of the approach; of the
+            head index's approach when the head takes the nearest index).
         head: a CMM head's ``(A, B)``, deg, on its grid; None on a machine tool.
         rotary: the tilted plane's ``((tilt axis, J), (rotary axis, I))``, deg (G68.2
             ``J`` and ``I``); () on a CMM.
+        exact: the frame of the approach itself when the head takes the nearest index
+            off it (the feature is planned there, then its plan expressed in
+            ``rotation``'s frame); None when ``rotation`` is the approach's frame.
     """
 
     rotation: frames.Rotation
     head: tuple[float, float] | None = None
     rotary: tuple[tuple[str, float], ...] = ()
+    exact: frames.Rotation | None = None
+
+    @property
+    def plan_rotation(self) -> frames.Rotation:
+        """The frame a feature is planned in: :attr:`exact` when set, else
+        :attr:`rotation`."""
+        return self.rotation if self.exact is None else self.exact
+
+    @property
+    def tilt(self) -> float:
+        """The angle between the stylus (frame Z of :attr:`rotation`) and the approach
+        (frame Z of :attr:`plan_rotation`), deg; 0 when they are one."""
+        if self.exact is None:
+            return 0.0
+        return _angle(_column_z(self.rotation), _column_z(self.exact))
 
     @property
     def identity(self) -> bool:
@@ -137,18 +169,80 @@ def _head(machine: MachineProfile, a: ir.Vec3, rotation: frames.Rotation
                 "setup")
     sa, sb = _on_grid(big_a, head.step), _on_grid(big_b, head.step)
     if sa is None or sb is None:
-        return (f"axis at A {big_a:.1f} B {big_b:.1f}: not on the head's {head.step:g} deg "
-                "grid: needs a setup")
-    if not head.b[0] - GRID_SNAP <= sb <= head.b[1] + GRID_SNAP:
-        if head.b[0] - GRID_SNAP <= sb - 360.0:
-            sb -= 360.0
-        elif sb + 360.0 <= head.b[1] + GRID_SNAP:
-            sb += 360.0
-        else:
-            return (f"axis at A {sa:g} B {sb:g}: beyond the head's B range "
-                    f"{head.b[0]:g}..{head.b[1]:g}: no orientation reaches this face: add "
-                    "the B range or a setup")
-    return Orientation(rotation, (sa, sb), ())
+        return _nearest_index(machine, a, rotation)
+    b = _b_in_range(head, sb)
+    if b is None:
+        return (f"axis at A {sa:g} B {sb:g}: beyond the head's B range "
+                f"{head.b[0]:g}..{head.b[1]:g}: no orientation reaches this face: add "
+                "the B range or a setup")
+    return Orientation(rotation, (sa, b), ())
+
+
+def tilt_bound(head: Head) -> float:
+    """The largest angle (deg) the stylus at a head's index may stand off a feature's
+    axis: :data:`TILT_OF_STEP` of the step."""
+    return TILT_OF_STEP * head.step
+
+
+def _b_in_range(head: Head, b: float) -> float | None:
+    """Head angle ``B`` (deg) in the head's B range, turned by a whole turn if need be;
+    None when no turn brings it in."""
+    for value in (b, b - 360.0, b + 360.0):
+        if head.b[0] - GRID_SNAP <= value <= head.b[1] + GRID_SNAP:
+            return value + 0.0
+    return None
+
+
+def _grid_around(value: float, step: float) -> list[float]:
+    """The grid values (deg) of ``step`` either side of ``value``, ascending."""
+    low = math.floor(value / step)
+    return sorted({low * step + 0.0, (low + 1) * step + 0.0})
+
+
+def _nearest_index(machine: MachineProfile, a: ir.Vec3, rotation: frames.Rotation
+                   ) -> Orientation | str:
+    """The head's index nearest approach ``a`` (off its grid; ``rotation`` its frame):
+    of the grid angles either side of ``A`` and ``B`` within the ranges, the one whose
+    approach is closest in angle to ``a`` (``A0``: the vertical probe); the reason when
+    none lies within :func:`tilt_bound`."""
+    head = machine.head
+    assert head is not None
+    big_a, big_b = head_angles(a)
+    where = f"axis at A {big_a:.1f} B {big_b:.1f}: not on the head's {head.step:g} deg grid"
+    best: tuple[float, float, float] | None = None
+    for ka in _grid_around(big_a, head.step):
+        if not head.a[0] - GRID_SNAP <= ka <= head.a[1] + GRID_SNAP:
+            continue
+        for kb in ([0.0] if ka == 0.0 else _grid_around(big_b, head.step)):
+            b = _b_in_range(head, kb)
+            if b is None:
+                continue
+            tilt = _angle(a, head_direction(ka, b))
+            if best is None or tilt < best[0] - 1e-12:
+                best = (tilt, ka, b)
+    if best is None:
+        return (f"{where}: no index of the head's B range {head.b[0]:g}..{head.b[1]:g} "
+                "beside it: add the B range or a setup")
+    tilt, ka, b = best
+    bound = tilt_bound(head)
+    if tilt > bound + GRID_SNAP:
+        return (f"{where}: the nearest index A{ka:g} B{b:g} stands {tilt:.1f} deg off the "
+                f"axis, more than {bound:g} deg: needs a setup")
+    index = frames.frame_for(head_direction(ka, b))
+    if frames.is_identity(index):
+        return replace(identity_of(machine), exact=rotation)
+    return Orientation(index, (ka, b), (), rotation)
+
+
+def _column_z(rotation: frames.Rotation) -> ir.Vec3:
+    """A frame's Z axis in work coordinates (the rotation's third column)."""
+    return (rotation[0][2], rotation[1][2], rotation[2][2])
+
+
+def _angle(u: ir.Vec3, v: ir.Vec3) -> float:
+    """The angle between unit vectors ``u`` and ``v``, deg (accurate near 0)."""
+    cross = np.cross(u, v)
+    return math.degrees(math.atan2(float(np.linalg.norm(cross)), float(np.dot(u, v))))
 
 
 def identity_of(machine: MachineProfile) -> Orientation:

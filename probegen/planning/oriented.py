@@ -9,6 +9,14 @@ open: out of material), then planned in the frame of the approach from that end
 (:func:`probegen.planning.orient.orientation_for`) on ``part.turned(R)`` at the frame's
 clearance level, exactly as a vertical feature.  Its plan, nodes and definition are in
 frame coordinates; :func:`probegen.ir.frames.in_work` maps them back.
+
+A feature a CMM head reaches only at the nearest index off its axis
+(:attr:`probegen.planning.orient.Orientation.exact`) is planned so in its exact frame
+``E``, then expressed in the index's frame ``I`` (:func:`at_index`: ``p_I = Iᵀ·E·p_E``,
+its moves up to the clearance level lengthened along its axis to the index frame's
+level) and checked there against ``part.turned(I)`` with the stylus along the index's
+axis: the touches stay square to the feature, the stylus stands tilted.  Features of one
+index share its frame and clearance level whatever their own axes.
 """
 
 from __future__ import annotations
@@ -20,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from probegen import ir
-from probegen.errors import PlanningError, ProbegenError
+from probegen.errors import CollisionError, PlanningError, ProbegenError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
 from probegen.planning.orient import (
@@ -41,7 +49,13 @@ from probegen.planning.orient import (
     to_frame,
     to_work,
 )
-from probegen.planning.revolved_plan import RevolvedPlan, find_owner, plan_revolved
+from probegen.planning.revolved import PathKind, PathPoint
+from probegen.planning.revolved_plan import (
+    RevolvedPlan,
+    check_alone,
+    find_owner,
+    plan_revolved,
+)
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -146,13 +160,18 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         if isinstance(o, str):
             reasons.append(o)
             continue
+        exact = Orientation(o.plan_rotation)
+        planner = _planner(in_frame(feature, exact.rotation), part.turned(exact.rotation),
+                           frame_clearance(part, exact, clearance_z))
         turned = part.turned(o.rotation)
         clear = frame_clearance(part, o, clearance_z)
-        local = in_frame(feature, o.rotation)
+        collisions: list[CollisionError] = []
+        if o.exact is not None:
+            planner = _at_index(planner, feature, o, turned, clear, collisions)
         try:
-            s, plan = pick_stylus(machine, _planner(local, turned, clear), force)
+            s, plan = pick_stylus(machine, planner, force)
         except ProbegenError as exc:
-            errors.append(exc)
+            errors.append(collisions[0] if collisions else exc)
             continue
         if feature.actions.work_offset is not None or feature.actions.align is not None:
             raise PlanningError(f"{feature.where}: update_work_offset and align are computed "
@@ -164,6 +183,89 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         raise errors[0]
     why = "; ".join(dict.fromkeys(reasons)) or "no open end to approach it from"
     raise PlanningError(f"{feature.where}: {why}")
+
+
+def _at_index(planner: Callable[[MachineProfile], RevolvedPlan], feature: RevolvedSpec,
+              o: Orientation, part: Part, clearance_z: float,
+              collisions: list[CollisionError]) -> Callable[[MachineProfile], RevolvedPlan]:
+    """``planner`` (in the exact frame of ``o``) with its plan expressed at the head's
+    index (:func:`at_index`) and checked there with the profile's stylus against
+    ``part`` (turned to the index frame) at its ``clearance_z``.  A collision there names
+    the index and the tilt, and is kept in ``collisions``: when no stylus plans, the
+    first one (the largest ball that plans in the exact frame) is the reason, not a ball
+    too large for the feature."""
+    def plan_with(machine: MachineProfile) -> RevolvedPlan:
+        plan = at_index(planner(machine), o, clearance_z)
+        try:
+            check_alone(plan, part, machine, clearance_z)
+        except CollisionError as exc:
+            error = CollisionError(f"{feature.where}: at the nearest head index "
+                                   f"{orient_name(o, 0)} the stylus stands {o.tilt:.2f} deg "
+                                   f"off the feature's axis: it collides: {exc}")
+            collisions.append(error)
+            raise error from None
+        return plan
+
+    return plan_with
+
+
+LEVEL_KINDS = (PathKind.ENTRY, PathKind.EXIT, PathKind.CLEAR)
+"""The path points at the clearance level, moved along the feature's axis to the index
+frame's level by :func:`at_index`."""
+
+
+def at_index(plan: RevolvedPlan, o: Orientation, clearance_z: float) -> RevolvedPlan:
+    """A plan made in ``o``'s exact frame ``E`` (``o.exact``) in its index frame ``I``
+    (``o.rotation``): every point ``p_I = Iᵀ·E·p_E``, every normal and axis turned alike;
+    the points at the clearance level (entry, exit, the moves over it between arcs)
+    moved along the feature's axis to the index frame's ``clearance_z`` (frame Z, mm), so
+    the stylus still leaves the feature along its axis and crosses level in the index
+    frame.  The M2 section figures (``plan.plan.sections``: radii, retracts, azimuths
+    about the axis) are those of the exact frame: they do not depend on the frame.
+
+    Raises:
+        PlanningError: a point of the plan lies above the index frame's clearance level.
+    """
+    assert o.exact is not None
+    turn = ir.Orient("EXACT", _product_t(o.rotation, o.exact))
+    axis = frames.direction_to_work(turn, (0.0, 0.0, 1.0))
+
+    def moved(p: PathPoint) -> PathPoint:
+        q = frames.to_work(turn, p.position)
+        if p.kind in LEVEL_KINDS:
+            t = (clearance_z - q[2]) / axis[2]
+            q = (q[0] + t * axis[0], q[1] + t * axis[1], clearance_z)
+        return replace(p, position=q,
+                       contact=None if p.contact is None else frames.to_work(turn, p.contact),
+                       normal=None if p.normal is None else frames.direction_to_work(
+                           turn, p.normal))
+
+    path = tuple(moved(p) for p in plan.plan.path)
+    top = max(p.position[2] for p in path)
+    if top > clearance_z + 1e-9:
+        raise PlanningError(f"{plan.spec.where}: at the head index {orient_name(o, 0)}: a "
+                            f"point of the plan at frame z = {top:.3f}, expected none above "
+                            f"the clearance level {clearance_z:.3f}")
+    feature = plan.resolved.feature
+    resolved = replace(plan.resolved, feature=replace(
+        feature, origin=frames.to_work(turn, feature.origin),
+        axis=frames.direction_to_work(turn, feature.axis),
+        sections=_sections_at(turn, feature.sections)),
+        sections=_sections_at(turn, plan.resolved.sections))
+    return replace(plan, resolved=resolved,
+                   plan=replace(plan.plan, path=path, clear_z=clearance_z),
+                   definition=frames.definition_in_work(turn, plan.definition))
+
+
+def _sections_at(turn: ir.Orient, sections: Sequence[Any]) -> tuple[Any, ...]:
+    """Recognised sections (``cad.revolved.FeatureSection``) with their centres turned."""
+    return tuple(replace(s, centre=frames.to_work(turn, s.centre)) for s in sections)
+
+
+def _product_t(a: frames.Rotation, b: frames.Rotation) -> frames.Rotation:
+    """``aᵀ·b``."""
+    return tuple(tuple(sum(a[k][i] * b[k][j] for k in range(3))  # type: ignore[return-value]
+                       for j in range(3)) for i in range(3))
 
 
 @dataclass(frozen=True, slots=True)

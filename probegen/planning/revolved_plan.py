@@ -17,16 +17,18 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from probegen import ir
 from probegen.errors import ModelError, PlanningError, ProbegenError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import obstacle_for
+from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.setup import make_setup
 from probegen.planning.well_posed import IllPosedError, free_fit, ill_posed, ill_posed_reason
-from probegen.spec.model import RevolvedSpec
+from probegen.spec.model import RevolvedSpec, Spec
 
 if TYPE_CHECKING:
     from probegen.cad import Part
@@ -351,3 +353,19 @@ def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
     """The feature's nodes: a rapid above its entry, then its block."""
     nodes = feature_nodes(p.plan, overtravel=machine.probe.overtravel, clearance_z=clearance_z)
     return (nodes[0], ir.FeatureBlock(p.definition, nodes[1:]))
+
+
+def check_alone(p: RevolvedPlan, part: Part, machine: MachineProfile,
+                clearance_z: float) -> None:
+    """Check one planned feature's moves (from the clearance plane and back) against the
+    model with the machine's margin (a feature planned in a frame: against the turned
+    part, at the frame's clearance level, with the profile of its stylus).
+
+    Raises:
+        CollisionError: a move of the feature brings the stylus into the part.
+    """
+    spec = Spec(source=part.path, model=Path(part.path), machine=machine,
+                dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,
+                program_name="ALL REVOLVED", features=(p.spec,))
+    program = ir.Program(make_setup(spec), revolved_nodes(p, machine, clearance_z))
+    check_program(program, obstacle_for(part, []), [], machine)

@@ -11,10 +11,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from probegen import ir
 from probegen.errors import CollisionError, ModelError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile
-from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.orient import orientation_for, orientation_label
 from probegen.planning.oriented import OrientedPlan, approaches, plan_oriented, reorientable
 from probegen.planning.revolved_plan import (
@@ -23,6 +21,7 @@ from probegen.planning.revolved_plan import (
     TYPE_OF_KIND,
     ResolvedRevolved,
     RevolvedPlan,
+    check_alone,
     definition,
     find_owner,
     plan_revolved,
@@ -31,7 +30,6 @@ from probegen.planning.revolved_plan import (
     smallest_bore,
     top_z,
 )
-from probegen.planning.setup import make_setup
 from probegen.planning.well_posed import IllPosedError
 from probegen.spec.model import RevolvedSpec, Spec
 
@@ -120,27 +118,11 @@ def _spec_kind(f: Any, part: Part, machine: MachineProfile) -> str:
         o = orientation_for(machine, a)
         if isinstance(o, str):
             continue
-        turned = part.turned(o.rotation)
+        turned = part.turned(o.plan_rotation)
         seen = next((g for g in revolved_features(turned) if f.faces[0] in g.faces), None)
         if seen is not None and seen.accessible:
             return _kind(seen)
     return _kind(f)
-
-
-def check_alone(p: RevolvedPlan, part: Part, machine: MachineProfile,
-                clearance_z: float) -> None:
-    """Check one planned feature's moves (from the clearance plane and back) against the
-    model with the machine's margin (a feature planned in a frame: against the turned
-    part, at the frame's clearance level, with the profile of its stylus).
-
-    Raises:
-        CollisionError: a move of the feature brings the stylus into the part.
-    """
-    spec = Spec(source=part.path, model=Path(part.path), machine=machine,
-                dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,
-                program_name="ALL REVOLVED", features=(p.spec,))
-    program = ir.Program(make_setup(spec), revolved_nodes(p, machine, clearance_z))
-    check_program(program, obstacle_for(part, []), [], machine)
 
 
 CLEARANCE_ABOVE_MODEL = 10.0
