@@ -14,7 +14,7 @@ from conftest import REPO
 from probegen import ir
 from probegen.cad import load_part
 from probegen.errors import CollisionError, SpecError
-from probegen.machine.profile import DEFAULT_BODY, load_profile
+from probegen.machine.profile import load_profile
 from probegen.planning.collision import (
     SphereObstacle,
     Stylus,
@@ -42,25 +42,24 @@ def deep(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def profile_with(tmp_path: Path, probe: str, source: str = "vmc-fanuc.toml") -> Path:
     lines = (MACHINES / source).read_text(encoding="utf-8").splitlines(keepends=True)
-    text = "".join(line for line in lines if not line.startswith("body_")).replace(
-        "[probe]\n", f"[probe]\n{probe}\n", 1)
+    at = next(k for k, line in enumerate(lines) if line.startswith("[probe]"))
+    text = "".join([*lines[:at + 1], f"{probe}\n", *lines[at + 1:]])
     path = tmp_path / "profile.toml"
     path.write_text(text, encoding="utf-8")
     return path
 
 
-def test_the_body_defaults_by_kind_and_the_head(tmp_path: Path) -> None:
-    tool = load_profile(profile_with(tmp_path, "")).probe  # the sample without its keys
-    assert (tool.body_diameter, tool.body_length) == DEFAULT_BODY["machine tool"]
-    cmm = load_profile(MACHINES / "cmm.toml")
-    assert cmm.head is not None
-    assert (cmm.probe.body_diameter, cmm.probe.body_length) == (
-        cmm.head.body_diameter, cmm.head.body_length)
+def test_the_body_is_checked_where_the_profile_states_it(tmp_path: Path) -> None:
+    plain = load_profile(MACHINES / "vmc-fanuc.toml").probe
+    assert (plain.body_diameter, plain.body_length) == (0.0, 0.0)  # none stated: none
     given = load_profile(profile_with(tmp_path, "body_diameter = 63.0\nbody_length = 80.0"))
     assert (given.probe.body_diameter, given.probe.body_length) == (63.0, 80.0)
     with pytest.raises(SpecError, match=r"probe\.body_diameter: expected at least "
                                         r"shank_diameter \(4\.5\)"):
-        load_profile(profile_with(tmp_path, "body_diameter = 3.0"))
+        load_profile(profile_with(tmp_path, "body_diameter = 3.0\nbody_length = 50.0"))
+    with pytest.raises(SpecError, match=r"probe\.body_length: expected a body_length with "
+                                        r"body_diameter"):
+        load_profile(profile_with(tmp_path, "body_diameter = 40.0"))
 
 
 def plunge(depth: float, machine_path: Path, length: float) -> tuple[ir.Program, object]:
@@ -77,7 +76,7 @@ def plunge(depth: float, machine_path: Path, length: float) -> tuple[ir.Program,
 def test_a_ball_below_its_stylus_length_takes_the_body_into_the_part(deep: Path) -> None:
     part = load_part(deep)
     obstacle = obstacle_for(part, [])
-    machine_path = MACHINES / "vmc-fanuc.toml"
+    machine_path = profile_with(deep.parent, "body_diameter = 40.0\nbody_length = 50.0")
     shallow, machine = plunge(15.0, machine_path, 20.0)
     check_program(shallow, obstacle, [], machine, part=part)  # the body stays above z=0
     program, machine = plunge(35.0, machine_path, 20.0)
@@ -91,7 +90,8 @@ def test_the_fast_check_never_clears_what_the_body_hits(deep: Path) -> None:
     """The height map's fast check (which fills the exact check's memo of sweeps) leaves
     to the exact check a plunge whose ball and shank clear but whose body does not."""
     part = load_part(deep)
-    machine = load_profile(MACHINES / "vmc-fanuc.toml")
+    machine = load_profile(profile_with(deep.parent,
+                                        "body_diameter = 40.0\nbody_length = 50.0"))
     for length, clears in ((20.0, False), (50.0, True)):
         m = replace(machine, probe=replace(machine.probe, length=length))
         setup = setup_for(m, 1, "DEEP", 60.0)
@@ -116,7 +116,8 @@ def test_the_body_of_an_analytic_sphere_check() -> None:
     assert sphere.clearance(centre, bodied)[1] < 0.0   # the body at z = -3 .. 27 cuts it
 
 
-def test_every_stylus_of_a_profile_carries_its_body() -> None:
-    m = load_profile(MACHINES / "cmm.toml")
+def test_every_stylus_of_a_profile_carries_its_body(tmp_path: Path) -> None:
+    m = load_profile(profile_with(tmp_path, "body_diameter = 14.0\nbody_length = 65.0",
+                                  "cmm.toml"))
     s = probe_stylus(m, 0.5, 0.35, 20.0)
     assert s.cylinders() == ((0.35, 0.5, 20.0), (7.0, 20.0, 85.0))

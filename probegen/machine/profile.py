@@ -75,8 +75,8 @@ class Probe:
         body_diameter: the probe body above the stylus (and the head or spindle nose it
             hangs from, as far as ``body_length`` reaches), mm: the collision check's
             cylinder on top of every stylus, so that a ball deeper than its stylus is
-            long never takes the body into the part (``[probe] body_diameter``; default
-            the ``[head]``'s, else :data:`DEFAULT_BODY`).
+            long never takes the body into the part (``[probe] body_diameter``; 0: none
+            stated, no body checked).
         body_length: that cylinder's length from the stylus's end, mm.
     """
 
@@ -302,13 +302,6 @@ class MachineProfile:
                         f"{option!r} to [controller] options if the control has it")
 
 
-DEFAULT_BODY = {"machine tool": (40.0, 50.0), "cmm": (14.0, 65.0)}
-"""The probe body a profile that states none is checked with, (diameter, length) mm: on
-a machine tool a spindle probe of the Renishaw OMP40 class (40 mm across, its body and
-holder 50 mm long below the spindle nose); on a CMM a touch-trigger probe module of the
-TP20 class with its head (14 mm across, 65 mm to the head's centre)."""
-
-
 def load_profile(path: str | Path) -> MachineProfile:
     """Load and validate a machine profile; errors name the file and key path."""
     file = str(path)
@@ -392,17 +385,18 @@ def _probe(t: Table, k: float) -> Probe:
 
 
 def _probe_body(t: Table, k: float, profile: MachineProfile) -> Probe:
-    """The ``[probe]`` with its body: ``body_diameter`` and ``body_length`` (mm) as given,
-    else the ``[head]``'s, else :data:`DEFAULT_BODY` for the machine's kind."""
-    head = profile.head
-    kind = "cmm" if profile.dialect == "dmis" else "machine tool"
-    diameter, length = ((head.body_diameter, head.body_length) if head is not None
-                        else DEFAULT_BODY[kind])
+    """The ``[probe]`` with its body: ``body_diameter`` and ``body_length`` (mm, both or
+    neither); without them no body is checked (the profiles written before the keys)."""
     body = t.get_float("body_diameter", positive=True)
     long = t.get_float("body_length", positive=True)
-    probe = replace(profile.probe,
-                    body_diameter=k * body if body is not None else diameter,
-                    body_length=k * long if long is not None else length)
+    if (body is None) != (long is None):
+        given, missing = ("body_diameter", "body_length") if long is None else \
+            ("body_length", "body_diameter")
+        raise t.fail(missing, f"a {missing} with {given} (the probe body is a cylinder: "
+                              "its diameter and its length from the stylus's end)")
+    if body is None or long is None:
+        return profile.probe
+    probe = replace(profile.probe, body_diameter=k * body, body_length=k * long)
     if probe.body_diameter < probe.shank_diameter:
         raise t.fail("body_diameter", f"at least shank_diameter ({probe.shank_diameter:g})")
     return probe
