@@ -142,10 +142,10 @@ def test_tilted_holes_planned_measured_or_left_out_with_the_reason(tilts: Path,
     assert heads["R4"][0] == (90.0, 0.0) and heads["R4"][1] == pytest.approx(2.0)
     assert sorted(notes) == [
         "R1 bore D6.500 (cylinder, faces 7): at the nearest head index A90B180 the stylus "
-        "stands 2.00 deg off the feature's axis: no room: the stylus shank meets face 7 (a "
+        "stands 2.00 deg off the feature's axis: no room: the stylus shank meets face 2 (a "
         "smaller or longer stylus, or another orientation) [segment 18 (touch PT 9) from "
         "(40.177, 28.646, -33.695) to (41.117, 27.707, -33.662): the stylus shank cuts "
-        "0.015 mm into face 7]",
+        "0.015 mm into face 2]",
         "R3 bore D10.000 (cylinder, faces 9): axis at A 86.3 B 3.7: not on the head's 7.5 "
         "deg grid: the nearest index A82.5 B0 stands 5.3 deg off the axis, more than 3.75 "
         "deg: needs a setup"]
