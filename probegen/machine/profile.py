@@ -331,7 +331,6 @@ def load_profile(path: str | Path) -> MachineProfile:
         tilt=read_tilt(root, dialect),
         setups=read_setups(root, k),
     )
-    profile = replace(profile, probe=_probe_body(probe_table, k, profile))
     probe_table.done()
     m.done()
     root.done()
@@ -381,11 +380,11 @@ def _probe(t: Table, k: float) -> Probe:
     )
     if probe.shank_diameter > probe.ball_diameter:
         raise t.fail("shank_diameter", f"at most ball_diameter ({ball:g})")
-    return probe
+    return _probe_body(t, k, probe)
 
 
-def _probe_body(t: Table, k: float, profile: MachineProfile) -> Probe:
-    """The ``[probe]`` with its body: ``body_diameter`` and ``body_length`` (mm, both or
+def _probe_body(t: Table, k: float, probe: Probe) -> Probe:
+    """``probe`` with its body: ``body_diameter`` and ``body_length`` (mm, both or
     neither); without them no body is checked (the profiles written before the keys)."""
     body = t.get_float("body_diameter", positive=True)
     long = t.get_float("body_length", positive=True)
@@ -395,8 +394,8 @@ def _probe_body(t: Table, k: float, profile: MachineProfile) -> Probe:
         raise t.fail(missing, f"a {missing} with {given} (the probe body is a cylinder: "
                               "its diameter and its length from the stylus's end)")
     if body is None or long is None:
-        return profile.probe
-    probe = replace(profile.probe, body_diameter=k * body, body_length=k * long)
+        return probe
+    probe = replace(probe, body_diameter=k * body, body_length=k * long)
     if probe.body_diameter < probe.shank_diameter:
         raise t.fail("body_diameter", f"at least shank_diameter ({probe.shank_diameter:g})")
     return probe

@@ -49,6 +49,7 @@ from probegen.planning.orient import (
     needs_index,
     to_frame,
     to_work,
+    top_of,
 )
 
 if TYPE_CHECKING:
@@ -453,8 +454,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
         if progress is not None:
             progress(1)
         if isinstance(node, ir.Orient | ir.SelectStylus) and needs_index(node, machine):
-            if top is None and part is not None:
-                top = float(part.bbox_max[2])
+            top = top_of(part) if top is None else top
             if top is None or part is None and isinstance(node, ir.Orient):
                 raise PlanningError(f"{change_name(node)}: the check of a change taken at the "
                                     "index height needs the part model, found none")
@@ -590,9 +590,10 @@ def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
     gap = min(ball, shank) + required
     how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
     shank_face = getattr(obstacle, "shank_face", None)
-    name = obstacle.name_at(worst)
     if part != "ball" and stylus is not None and shank_face is not None:
         part, name = shank_face(worst, stylus)
+    else:
+        name = obstacle.name_at(worst)
     who = "the probe body" if part == "probe body" else f"the stylus {part}"
     return f"{who} {how} {name}; expected a clearance of at least {required:.3f} mm"
 
