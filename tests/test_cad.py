@@ -184,6 +184,33 @@ def test_tessellate_sphere25(sphere25: cad.Model) -> None:
     assert mesh.bounds[1] == pytest.approx(sphere25.bbox_max, abs=0.02)
 
 
+BASE_PLATE = REF / "parts" / "metalboop_p0011_rev_e_base_plate.step"
+
+
+@pytest.mark.skipif(not BASE_PLATE.exists(), reason="shared/ref/parts not present")
+def test_tessellate_faces_occt_cannot_mesh() -> None:
+    """OCCT's mesher fails on three countersink cones of the MetalBoop base plate (faces
+    8, 147, 333: no triangulation); each is meshed on its parameter bounds, every face of
+    the part has triangles, on the face and wound out of the material."""
+    model = cad.load_step(BASE_PLATE)
+    mesh = cad.tessellate(model, tolerance=0.01)
+    ids = np.asarray(mesh.metadata["face_ids"])
+    assert set(ids.tolist()) == {f.id for f in model.faces}
+    part = cad.Part(model)
+    for face in (8, 147, 333):
+        record = model.faces[face - 1]
+        assert record.type == "cone" and record.inner
+        centres = mesh.triangles_center[ids == face]
+        normals = mesh.face_normals[ids == face]
+        area = float(mesh.area_faces[ids == face].sum())
+        assert area == pytest.approx(record.area, rel=2e-3)
+        assert max(part.exact.distance(face - 1, c)[0] for c in centres) < 0.01
+        axis, origin = np.array(record.axis), np.array(record.origin)
+        radial = (centres - origin) - np.outer((centres - origin) @ axis, axis)
+        radial /= np.linalg.norm(radial, axis=1)[:, None]
+        assert np.all(np.sum(normals * radial, axis=1) < -0.5)  # a bore: towards the axis
+
+
 # ----------------------------------------------------------------- inner and outer
 
 
