@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from probegen.evaluate.run_identity import IdentityOptions
     from probegen.machine.calibration import ProbeCalibration
     from probegen.spc.series import Series
+    from probegen.spec.model import Spec
 
 DMIS_OUTPUT_SUFFIXES = (".dms", ".dmi", ".dmis")
 """``probegen ingest`` reads a file with one of these suffixes as DMIS output (the virtual
@@ -70,14 +71,7 @@ def _ingest(args: argparse.Namespace) -> int:
         if args.calibration_date else ""
     dmis = [log for log in args.log if Path(log).suffix.lower() in DMIS_OUTPUT_SUFFIXES]
     if dmis:
-        from probegen.evaluate.ingest import ingest_dmis
-
-        if len(args.log) > 1:
-            raise ProbegenError(f"ingest {' '.join(args.log)}: expected one DMIS output "
-                                f"file (the CMM evaluates each setup's features itself; "
-                                f"ingest reads the free-form features of one), found "
-                                f"{len(args.log)} files")
-        result = ingest_dmis(dmis[0], spec, decision_rule=args.decision_rule)
+        result = _ingest_dmis(args, spec)
         if cal is not None:  # the CMM compensated its touches with its own probe data
             result = replace(result, notes=(*result.notes, "--calibration is not applied "
                                             "to a DMIS output: the CMM compensated its "
@@ -109,6 +103,29 @@ def _ingest(args: argparse.Namespace) -> int:
     if args.store:
         store_run(result, args.store)
     return verdict_code(result.status)
+
+
+def _ingest_dmis(args: argparse.Namespace, spec: Spec) -> Ingested:
+    """``ingest`` of DMIS output files: with setups in the machine profile, one output per
+    setup program, every feature in part coordinates
+    (:func:`probegen.evaluate.setups_dmis.ingest_dmis_setups`); without, one file, its
+    free-form features (:func:`probegen.evaluate.ingest.ingest_dmis`)."""
+    from probegen.evaluate.ingest import ingest_dmis
+
+    others = [log for log in args.log if Path(log).suffix.lower() not in DMIS_OUTPUT_SUFFIXES]
+    if others:
+        raise ProbegenError(f"ingest {' '.join(args.log)}: expected DMIS output files only "
+                            f"(suffix {', '.join(DMIS_OUTPUT_SUFFIXES)}) or DPRNT logs only, "
+                            f"found both ({', '.join(others)})")
+    if spec.machine.setups:
+        from probegen.evaluate.setups_dmis import ingest_dmis_setups
+
+        return ingest_dmis_setups(args.log, spec, decision_rule=args.decision_rule)
+    if len(args.log) > 1:
+        raise ProbegenError(f"ingest {' '.join(args.log)}: expected one DMIS output file "
+                            f"(the machine profile has no [[setup]]: one program), found "
+                            f"{len(args.log)} files")
+    return ingest_dmis(args.log[0], spec, decision_rule=args.decision_rule)
 
 
 def write_calibration(target: Path, entries: tuple[ProbeCalibration, ...]

@@ -111,15 +111,16 @@ def ingest_setups(logs: Sequence[str | Path], spec: Spec, *,
     return _merged(spec, done, missing)
 
 
-def _not_measured(sp: SetupProgram) -> list[NotEvaluated]:
-    """The features of a setup program whose log is not given: NOT EVALUATED, with the
-    characteristics the spec asks for (the program planned again for the sections)."""
+def _not_measured(sp: SetupProgram, what: str = "log") -> list[NotEvaluated]:
+    """The features of a setup program whose log (``what``: or DMIS output) is not given:
+    NOT EVALUATED, with the characteristics the spec asks for (the program planned again
+    for the sections)."""
     from probegen.planning import plan_program
 
     planned = plan_program(sp.spec, runtime_variables=True, check_collisions=False,
                            part=sp.part)
     sections = {o.plan.spec.id: len(nominal_of(o.plan).sections) for o in planned.oriented}
-    why = (f"not measured: no log of setup {sp.name} (program "
+    why = (f"not measured: no {what} of setup {sp.name} (program "
            f"O{sp.spec.program_number:04d}) was given")
     out = []
     for f in sp.spec.features:
