@@ -7,6 +7,7 @@ five-axis virtual machine."""
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,7 @@ import pytest
 from conftest import REPO
 
 from probegen.cli.app import main
-from probegen.errors import ProbegenError
+from probegen.errors import ExitCode, ProbegenError
 from probegen.ir import frames
 
 sys.path.insert(0, str(REPO / "benchmarks"))
@@ -175,3 +176,42 @@ def test_the_cones_of_a_flipped_setup_are_on_the_model_and_recovered(
     else:
         got = ingest_setups(outputs, spec, part=part)
     _check_recovered(got, runs, spec)
+
+
+def test_ingest_of_both_dmis_outputs_on_the_command_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """test_setups.py's block (a bore on top, one facing down) compiled to DMIS, both
+    programs run on the virtual CMM off by OFFSET, ``probegen ingest`` of both outputs:
+    results.json in part coordinates, both bores OK; the FLIPPED output given twice is
+    refused, naming it."""
+    from test_setups import FLIPPED, SPEC, block, five_without_setups
+
+    block(tmp_path / "part.step")
+    (tmp_path / "five.toml").write_text(five_without_setups() + FLIPPED, encoding="utf-8")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.format(profile="five.toml", extra=""), encoding="utf-8")
+    out = tmp_path / "dmis"
+    assert main(["-q", "compile", str(spec), "-d", "dmis", "-o", f"{out}/"]) == ExitCode.OK
+    outputs = []
+    for name, setup in (("spec_FLIPPED.dmi", "FLIPPED"), ("spec.dmi", None)):
+        output = tmp_path / f"{name}.dms"
+        args = ["-q", "sim", str(out / name), "--spec", str(spec), "-o", str(output),
+                "--offset", *(str(v) for v in OFFSET)]
+        assert main(args + (["--setup", setup] if setup else [])) == 0
+        outputs.append(str(output))
+    res = tmp_path / "res"
+    assert main(["-q", "ingest", *outputs, "--spec", str(spec), "-o", str(res)]) == ExitCode.OK
+    results = json.loads((res / "results.json").read_text(encoding="utf-8"))
+    got = {f["id"]: {c["name"]: c for c in f["characteristics"]} for f in results["features"]}
+    assert list(got) == ["TOP", "BOTTOM"]
+    assert [f["status"] for f in results["features"]] == ["OK", "OK"]
+    shift = {"TOP": OFFSET, "BOTTOM": np.asarray(frames.apply_t(frames.FLIP_X, tuple(OFFSET)))}
+    for fid, s in shift.items():
+        for axis, k in (("X", 0), ("Y", 1)):
+            assert got[fid][axis]["deviation"] == pytest.approx(s[k], abs=1e-3), (fid, axis)
+        assert got[fid]["D"]["deviation"] == pytest.approx(0.0, abs=1e-3)
+    assert got["BOTTOM"]["Y"]["measured"] == pytest.approx(30.0 + 0.003, abs=1e-3)
+    capsys.readouterr()
+    code = main(["-q", "ingest", outputs[0], outputs[0], "--spec", str(spec), "-o", str(res)])
+    assert code != ExitCode.OK
+    assert "a second output of 'TWO BORES FLIPPED'" in capsys.readouterr().err
