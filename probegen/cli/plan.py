@@ -371,6 +371,55 @@ def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
                        encoding="ascii")
             print(f"wrote {target}" + (f" (setup {sp.name}: {' '.join(sp.features)})"
                                        if len(setups) > 1 else ""))
+    if args.all_revolved:
+        target = spec_file(_target(args.output, stem, ".nc", len(names)))
+        write_file(target, all_revolved_spec_text(spec, target, args.input, args.machine),
+                   "the spec of --all-revolved")
+        print(f"wrote {target} (the spec of these programs: give it to ingest with --spec)")
+
+
+def spec_file(first: Path) -> Path:
+    """The spec ``plan --all-revolved -o`` writes beside its first program ``first``:
+    ``<stem>_all_revolved.toml`` (never the ``<model>.toml`` ``probegen init`` writes)."""
+    return first.with_name(f"{first.stem}_all_revolved.toml")
+
+
+def all_revolved_spec_text(spec: Any, target: Path, model: str, profile: str) -> str:
+    """The TOML text of the spec ``plan --all-revolved`` planned, for the file ``target``
+    (``model`` and ``profile`` as given on the command line, written relative to it): the
+    program's number, name and clearance plane, every feature with its kind, face and
+    points, and the setup of those a ``[[setup]]`` measures; ``ingest --spec`` of it plans
+    the same programs again (edited, it plans others: their logs no longer match)."""
+    from probegen.cli.init import _relative, _string
+    from probegen.planning.setups import AS_LOADED
+
+    folder = target.parent
+    lines = [
+        f"# The spec of the programs probegen plan --all-revolved wrote for "
+        f"{Path(model).name}",
+        "# with the machine profile " + Path(profile).name + ": give it to probegen "
+        "ingest --spec with their",
+        "# logs or DMIS outputs (one per setup program). Tolerances may be added; any other",
+        "# change plans other programs, whose logs these are not.",
+        "",
+        "[part]",
+        f"model = {_string(_relative(model, folder))}",
+        'units = "mm"',
+        "",
+        "[machine]",
+        f"profile = {_string(_relative(profile, folder))}",
+        f"clearance_z = {spec.clearance_z!r}",
+        "",
+        "[program]",
+        f"number = {spec.program_number}",
+        f"name = {_string(spec.program_name)}",
+    ]
+    for f in spec.features:
+        lines += ["", "[[feature]]", f"id = {_string(f.id)}", f"kind = {_string(f.kind)}",
+                  f"face = {f.face}", f"points = {f.points}"]
+        if f.setup is not None and f.setup != AS_LOADED:
+            lines.append(f"setup = {_string(f.setup)}")
+    return "\n".join(lines) + "\n"
 
 
 def program_text(name: str, planned: Any, left_out: tuple[str, ...]) -> str:

@@ -144,9 +144,10 @@ class Ingested:
     @property
     def uncertainty_notes(self) -> tuple[str, ...]:
         """What the uncertainties leave out: unstated contributions, fits with few
-        degrees of freedom."""
+        degrees of freedom (a revolved result without points is a CMM's feature actual,
+        not a fit of ours: ``evaluate/setups_dmis.py``)."""
         fits = [(r.feature, "sphere_test", len(r.points)) for r in self.results]
-        fits += [(r.feature, r.kind, len(r.points)) for r in self.revolved]
+        fits += [(r.feature, r.kind, len(r.points)) for r in self.revolved if r.points]
         few = [few_dof_note(f, k, n, self.budget) for f, k, n in fits]
         return (*self.budget.notes(), *(n for n in few if n is not None))
 
