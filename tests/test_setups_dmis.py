@@ -215,3 +215,45 @@ def test_ingest_of_both_dmis_outputs_on_the_command_line(
     code = main(["-q", "ingest", outputs[0], outputs[0], "--spec", str(spec), "-o", str(res)])
     assert code != ExitCode.OK
     assert "a second output of 'TWO BORES FLIPPED'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("dialect", ["dmis", "fanuc"])
+def test_plan_all_revolved_then_ingest_every_setup_on_the_command_line(
+        tmp_path: Path, dialect: str) -> None:
+    """``plan --all-revolved odd_angle.step -d D -o DIR`` writes one program per setup and
+    the spec they were planned from; each program runs on the virtual CMM / five-axis
+    machine off by OFFSET; ``ingest`` of all the outputs with that spec reports every
+    feature in part coordinates: its centre off by Rᵀ·OFFSET square to its axis (POS
+    and, for the vertical R2 turned over, X and Y), its diameter nominal, to 1 µm."""
+    from probegen import cad
+    from probegen.cad.revolved import revolved_features
+
+    profile = CMM if dialect == "dmis" else FIVE
+    ext = {"dmis": ".dmi", "fanuc": ".nc"}[dialect]
+    out = tmp_path / "out"
+    assert main(["-q", "plan", "--all-revolved", str(ODD), "--machine", str(profile), "-d",
+                 dialect, "-o", str(out)]) == ExitCode.OK
+    spec = out / "odd_angle_all_revolved.toml"
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        [f"odd_angle{ext}", f"odd_angle_FLIPPED{ext}", spec.name])
+    outputs = []
+    for stem, setup in (("odd_angle_FLIPPED", "FLIPPED"), ("odd_angle", None)):
+        output = out / f"{stem}{'.dms' if dialect == 'dmis' else '.log'}"
+        args = ["-q", "sim", str(out / f"{stem}{ext}"), "--spec", str(spec), "-o",
+                str(output), "--offset", *(str(v) for v in OFFSET)]
+        assert main(args + (["--setup", setup] if setup else [])) == 0, stem
+        outputs.append(str(output))
+    res = tmp_path / "res"
+    assert main(["-q", "ingest", *outputs, "--spec", str(spec), "-o", str(res)]) == ExitCode.OK
+    results = json.loads((res / "results.json").read_text(encoding="utf-8"))
+    got = {f["id"]: {c["name"]: c for c in f["characteristics"]} for f in results["features"]}
+    assert sorted(got) == ["R1", "R2", "R3"]
+    axes = {f"R{f.id}": np.asarray(f.axis) for f in revolved_features(cad.load_part(ODD))}
+    for fid, c in got.items():
+        shift = np.asarray(frames.apply_t(frames.FLIP_X, tuple(OFFSET))) if fid == "R2" \
+            else OFFSET
+        pos = 2.0 * float(np.linalg.norm(_across(shift, axes[fid])))
+        assert c["POS"]["measured"] == pytest.approx(pos, abs=1e-3), fid
+        assert c["D"]["deviation"] == pytest.approx(0.0, abs=1e-3), fid
+    assert (got["R2"]["X"]["deviation"], got["R2"]["Y"]["deviation"]) == pytest.approx(
+        (0.004, 0.003), abs=1e-3)
