@@ -270,7 +270,9 @@ def test_plan_all_revolved_writes_one_program_per_setup(
     rows = [line.split() for line in text.splitlines() if line.startswith("R")]
     assert [(r[0], r[-1]) for r in rows] == [("R1", "LOADED"), ("R2", "FLIPPED")]
     assert "wrote " + str(out / "part_FLIPPED.nc") + " (setup FLIPPED: R2)" in text
-    assert sorted(p.name for p in out.iterdir()) == ["part.nc", "part_FLIPPED.nc"]
+    assert sorted(p.name for p in out.iterdir()) == ["part.nc", "part_FLIPPED.nc",
+                                                     "part_all_revolved.toml"]
+    assert "wrote " + str(out / "part_all_revolved.toml") + " (the spec of these" in text
 
 
 def test_small_helpers() -> None:

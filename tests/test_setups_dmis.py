@@ -15,6 +15,9 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import REPO
+from fuzzing import examples
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from probegen.cli.app import main
 from probegen.errors import ExitCode, ProbegenError
@@ -257,3 +260,44 @@ def test_plan_all_revolved_then_ingest_every_setup_on_the_command_line(
         assert c["D"]["deviation"] == pytest.approx(0.0, abs=1e-3), fid
     assert (got["R2"]["X"]["deviation"], got["R2"]["Y"]["deviation"]) == pytest.approx(
         (0.004, 0.003), abs=1e-3)
+
+
+@settings(max_examples=examples(60))
+@given(lines=st.lists(st.one_of(
+    st.sampled_from(["FILNAM/'TWO BORES'", "FILNAM/'TWO BORES FLIPPED'", "FILNAM/'X'",
+                     "FILNAM/", "UNITS/MM, ANGDEC", "ENDFIL", "OUTPUT/FA(TOP)",
+                     "FA(TOP) = FEAT/CIRCLE, INNER, CART, 1, 2, 3, 0, 0, 1, 5",
+                     "FA(BOTTOM) = FEAT/CYLNDR, INNER, CART, 1, 2, 3, 0, 0, 1, 5, 4",
+                     "FA(Q_1) = FEAT/POINT, CART, 1, 2, 3, 0, 0, 1", ""]),
+    st.text("FA(TOPBM)=/,'ILNC 0123456789.$\n", max_size=40)), max_size=8),
+    count=st.integers(1, 3))
+def test_random_dmis_outputs_pair_with_a_program_or_are_refused(lines: list[str],
+                                                                 count: int) -> None:
+    """Outputs of random lines: each read and paired with one setup program (by its
+    FILNAM or its features), or a ProbegenError naming the file."""
+    import tempfile
+    from types import SimpleNamespace
+
+    from probegen.evaluate.setups_dmis import pair_outputs
+    from probegen.results import read_dmis_output
+
+    programs = [SimpleNamespace(
+        spec=SimpleNamespace(program_name=name, features=(SimpleNamespace(id=fid),)),
+        name=setup) for name, fid, setup in (("TWO BORES", "TOP", "AS LOADED"),
+                                            ("TWO BORES FLIPPED", "BOTTOM", "FLIPPED"))]
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for k in range(count):
+            path = Path(tmp) / f"{k}.dms"
+            path.write_text("\n".join(lines[k:]) + "\n", encoding="latin-1")
+            paths.append(path)
+        try:
+            outputs = [read_dmis_output(p) for p in paths]
+            paired = pair_outputs(paths, outputs, programs)  # type: ignore[arg-type]
+        except ProbegenError as exc:
+            assert any(str(p) in str(exc) for p in paths), str(exc)
+            return
+        assert len(paired) == len(paths)
+        for k, (_, output) in paired.items():
+            own = {f.id for f in programs[k].spec.features}
+            assert {fa.name for fa in output.features} <= own | {"Q_1"}

@@ -177,7 +177,7 @@ def _one(path: str | Path, output: DmisOutput, sp: SetupProgram, spec: Spec,
                    f"the program planned again has no feature {feature.id}")
             missing.append(NotEvaluated(feature.id, feature.kind, why))
             continue
-        revolved.append(_result(feature, fa, nominal, sp.rotation, notes))
+        revolved.append(_result(feature, fa, nominal, sp, notes))
     freeform: tuple[object, ...] = ()
     if sp.setup is None:
         found, more = ingest_dmis_freeform(output, sp.spec, sp.part)
@@ -220,15 +220,20 @@ def _shape(nominal: ir.FeatureDef) -> tuple[ir.Vec3, ir.Vec3, float, float]:
 
 
 def _result(feature: RevolvedSpec, fa: FeatureActual, nominal: ir.FeatureDef,
-            rotation: frames.Rotation, notes: list[str]) -> RevolvedResult:
-    """A feature actual (table frame) against its nominal, in part coordinates."""
+            sp: SetupProgram, notes: list[str]) -> RevolvedResult:
+    """A feature actual (``sp``'s table frame) against its nominal, in part coordinates:
+    points by :meth:`~probegen.planning.setups.SetupProgram.to_part`, directions by
+    ``Rᵀ``."""
     def back(v: ir.Vec3) -> np.ndarray:
-        return np.asarray(frames.apply_t(rotation, v), dtype=np.float64)
+        return np.asarray(sp.to_part(v), dtype=np.float64)
+
+    def turn(v: ir.Vec3) -> np.ndarray:
+        return np.asarray(frames.apply_t(sp.rotation, v), dtype=np.float64)
 
     point, axis, diameter, half = _shape(nominal)
-    n_point, n_axis = back(point), back(axis)
+    n_point, n_axis = back(point), turn(axis)
     m_point = back(fa.position)
-    m_axis = back(fa.direction) if fa.direction is not None else n_axis
+    m_axis = turn(fa.direction) if fa.direction is not None else n_axis
     if float(m_axis @ n_axis) < 0.0:
         m_axis = -m_axis
     off = m_point - n_point
@@ -254,7 +259,7 @@ def _result(feature: RevolvedSpec, fa: FeatureActual, nominal: ir.FeatureDef,
         notes.append(f"feature {feature.id}: {', '.join(asked)} not evaluated from a DMIS "
                      "feature actual (the CMM reports them as tolerance actuals)")
     return RevolvedResult(
-        feature=feature.id, kind=feature.kind, centre=frames.apply_t(rotation, fa.position),
+        feature=feature.id, kind=feature.kind, centre=sp.to_part(fa.position),
         axis=(float(m_axis[0]), float(m_axis[1]), float(m_axis[2])),
         diameter=fa.diameter if fa.diameter is not None else diameter, form=0.0,
         points=(), directions=(), residuals=(), characteristics=tuple(chars),
