@@ -133,6 +133,14 @@ def test_a_mismatched_dmis_output_is_refused(tmp_path: Path) -> None:
     assert [r.feature for r in got.revolved] == ["R2"]
     assert {n.feature for n in got.not_evaluated} == {"R1", "R3"}
     assert all("no DMIS output of setup AS LOADED" in n.reason for n in got.not_evaluated)
+    # paired by its FILNAM, an output without the feature's actual leaves it NOT EVALUATED
+    empty = tmp_path / "empty.dms"
+    empty.write_text("FILNAM/'ALL REVOLVED FLIPPED'\nUNITS/MM, ANGDEC\nENDFIL\n",
+                     encoding="ascii")
+    got = ingest_dmis_setups([empty], spec, part=part)
+    assert not got.revolved
+    (r2,) = [n for n in got.not_evaluated if n.feature == "R2"]
+    assert r2.reason == f"no feature actual FA(R2) in {empty}" and "POS" in r2.characteristics
 
 
 def countersunk_block(path: Path) -> Path:

@@ -39,7 +39,13 @@ import numpy as np
 from probegen import ir
 from probegen.errors import ProbegenError
 from probegen.evaluate.characteristics import Characteristic, NotEvaluated
-from probegen.evaluate.ingest import Ingested, _only, budget_of, ingest_dmis_freeform
+from probegen.evaluate.ingest import (
+    Ingested,
+    _only,
+    _revolved_names,
+    budget_of,
+    ingest_dmis_freeform,
+)
 from probegen.evaluate.revolved import RevolvedResult
 from probegen.evaluate.setups import _merged, _not_measured
 from probegen.ir import frames
@@ -175,7 +181,10 @@ def _one(path: str | Path, output: DmisOutput, sp: SetupProgram, spec: Spec,
         if fa is None or nominal is None:
             why = (f"no feature actual FA({feature.id}) in {path}" if fa is None else
                    f"the program planned again has no feature {feature.id}")
-            missing.append(NotEvaluated(feature.id, feature.kind, why))
+            names = _revolved_names(feature, 0)
+            missing.append(NotEvaluated(feature.id, feature.kind, why,
+                                        tuple(n for n, _, _ in names),
+                                        tuple((lo, hi) for _, lo, hi in names)))
             continue
         revolved.append(_result(feature, fa, nominal, sp, notes))
     freeform: tuple[object, ...] = ()
