@@ -336,7 +336,7 @@ def run(part: Any, model: Path, case: ProfileCase, machine: Any, load_s: float,
     row.emit = f"{lines} lines{names}, {time.perf_counter() - t1:.1f} s"
     if case.dialect == "dmis":
         row.points = points_text([
-            check_points(text, part if sp.setup is None else part.turned(sp.setup.rotation))
+            check_points(text, sp.part)  # the part as it lies in the setup (R·p_part)
             for text, (sp, _) in zip(texts, setups, strict=True)])
     if simulate is not None:
         said = [simulate_program(model, text, case, simulate,
