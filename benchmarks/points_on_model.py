@@ -80,8 +80,10 @@ def check_points(text: str, part: Any) -> PointsCheck:
     face_ids = mesh.metadata["face_ids"]  # model face ids, 1-based
     nearby = trimesh.proximity.nearby_faces(mesh, points)
     exact = part.exact
+    # a face the mesh lacks (OCCT left it without triangles) is a candidate everywhere
+    unmeshed = set(range(len(part.faces))) - {int(k) - 1 for k in set(face_ids.tolist())}
     for p, v, triangles in zip(points, vectors, nearby, strict=True):
-        faces = sorted({int(face_ids[int(t)]) - 1 for t in triangles})
+        faces = sorted({int(face_ids[int(t)]) - 1 for t in triangles} | unmeshed)
         distance = min(exact.distance(k, p)[0] for k in faces)
         out.worst = max(out.worst, distance)
         out.off_model += distance > ON_MODEL
