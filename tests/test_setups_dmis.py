@@ -226,6 +226,11 @@ def test_ingest_of_both_dmis_outputs_on_the_command_line(
     code = main(["-q", "ingest", outputs[0], outputs[0], "--spec", str(spec), "-o", str(res)])
     assert code != ExitCode.OK
     assert "a second output of 'TWO BORES FLIPPED'" in capsys.readouterr().err
+    log = tmp_path / "run.log"
+    log.write_text("%\nPGSTART O1001 V2 H00000000\nPGEND\n", encoding="ascii")
+    code = main(["-q", "ingest", outputs[0], str(log), "--spec", str(spec), "-o", str(res)])
+    assert code != ExitCode.OK
+    assert "expected DMIS output files only" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("dialect", ["dmis", "fanuc"])
