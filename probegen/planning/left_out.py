@@ -151,8 +151,11 @@ def _blind_depth(f: Any, part: Part) -> float | None:
         return None
     import numpy as np
 
-    frame = f.frame()
-    arcs = f.sections[0].arcs if f.sections else ()
+    from probegen.geometry.frames import rotation_to_z
+
+    frame = rotation_to_z(f.axis)  # the azimuth frame of the feature's arcs
+    sections = getattr(f, "sections", ())
+    arcs = sections[0].arcs if sections else ()
     phi = 0.5 * (arcs[0][0] + arcs[0][1]) if arcs else 0.0
     inset = min(BLIND_PROBE, 0.25 * f.radius)
     radial = (f.radius - inset if f.inner else f.radius + inset) * (
