@@ -9,7 +9,12 @@ Parts made here reproduce what the NIST models showed:
   every touch lies on the wall's face with the outward normal;
 * the same "C" 0.6 mm deep: shallower than the smallest ball needs (NIST CTC 3's 0.635 mm
   engraving): the part's limit, said so (``blind, depth``), for the groove's wall (a bore)
-  and its island (a boss) alike, not a bare collision.
+  and its island (a boss) alike, not a bare collision;
+* a pocket whose outline has a rounded corner of R3 between two sides 157 deg apart: an
+  arc of 1.19 mm, shorter than the 1 mm ball's end margins (its radius and the margin at
+  each end, 1.6 mm), though the sides continue the arc and leave the ball room (MetalBoop's
+  front plate: the rounded corners of its profile): measured with the margin alone at
+  each end.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from build123d import Align, Box, Cylinder, Pos, export_step
+from build123d import Align, Box, Cylinder, Polygon, Pos, export_step, extrude, fillet
 from conftest import REPO
 
 from probegen import cad, ir
@@ -71,32 +76,58 @@ def test_the_wall_round_an_island_is_reached_beside_its_arc(deep: Path) -> None:
     assert wall.sections[0].arcs != ()  # type: ignore[attr-defined]
 
 
-def test_the_wall_round_an_island_is_measured_on_the_virtual_cmm(
-        deep: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def _measured_on_the_cmm(model: Path, part: cad.Part, feature: object, tmp_path: Path
+                         ) -> list[ir.Touch]:
+    """``plan --all-revolved`` of ``model`` with the CMM sample measures ``feature`` (a
+    recognised revolved feature); its program runs on the virtual CMM; every touch of
+    the feature lies on its face.  Its touches."""
     from probegen.cli.app import main
     from probegen.dialects import get_dialect
 
-    part, machine = cad.load_part(deep), load_profile(CMM)
-    wall = _wall(part)
-    spec, notes = all_revolved_spec(part, machine)
-    face = wall.faces[0]  # type: ignore[attr-defined]
+    spec, notes = all_revolved_spec(part, load_profile(CMM))
+    face = feature.faces[0]  # type: ignore[attr-defined]
     assert [f.face for f in spec.features if f.face == face] == [face], notes
     planned = plan_program(spec, runtime_variables=False, part=part)
     touches = [n for n in ir.walk(planned.program.body)
-               if isinstance(n, ir.Touch) and n.feature == f"R{wall.id}"]  # type: ignore[attr-defined]
+               if isinstance(n, ir.Touch) and n.feature == f"R{feature.id}"]  # type: ignore[attr-defined]
+    assert all(part.exact.contains(face - 1, np.asarray(t.contact)) for t in touches)
+    program = tmp_path / "program.dmi"
+    program.write_text(get_dialect("dmis").generate(planned.program), encoding="ascii")
+    assert main(["sim", str(program), "--part", str(model), "--machine", str(CMM),
+                 "-o", str(tmp_path / "out.txt")]) == 0
+    return touches
+
+
+def test_the_wall_round_an_island_is_measured_on_the_virtual_cmm(
+        deep: Path, tmp_path: Path) -> None:
+    part = cad.load_part(deep)
+    touches = _measured_on_the_cmm(deep, part, _wall(part), tmp_path)
     assert len(touches) >= 4  # of 8: a circle needs 3, spread over the arc
     spread = [math.atan2(t.contact[1], t.contact[0]) % (2 * math.pi) for t in touches]
     assert max(spread) - min(spread) > math.radians(90.0)
-    for t in touches:  # on the wall, the normal towards the axis (out of the material)
-        contact = np.asarray(t.contact)
-        assert part.exact.contains(face - 1, contact)
-        radial = contact[:2] / np.linalg.norm(contact[:2])
+    for t in touches:  # the normal towards the axis: out of the material
+        radial = np.asarray(t.contact[:2]) / np.linalg.norm(t.contact[:2])
         assert float(np.dot(t.normal[:2], radial)) == pytest.approx(-1.0, abs=1e-6)
-    program = tmp_path / "deep_c.dmi"
-    program.write_text(get_dialect("dmis").generate(planned.program), encoding="ascii")
-    assert main(["sim", str(program), "--part", str(deep), "--machine", str(CMM),
-                 "-o", str(tmp_path / "out.txt")]) == 0
-    assert "alarm" not in capsys.readouterr().err.lower()
+
+
+def test_a_rounded_corner_of_a_profile_is_measured_with_the_margin_at_its_ends(
+        tmp_path: Path) -> None:
+    outline = fillet(Polygon((-15, -8), (15, -8), (15, 4), (0, 7), (-15, 4),
+                             align=None).vertices(), radius=3.0)
+    model = tmp_path / "corner.step"
+    export_step(Box(50, 40, 10, align=(C, C, MIN)) - Pos(0, 0, 10) * extrude(
+        outline, amount=-5), model)
+    part = cad.load_part(model)
+    corner = next(f for f in revolved_features(part) if f.sections[0].arcs
+                  and f.sections[0].arcs[0][1] - f.sections[0].arcs[0][0] < math.radians(30))
+    arc = corner.sections[0].arcs[0]
+    assert 3.0 * (arc[1] - arc[0]) == pytest.approx(1.19, abs=0.01)  # under 1.6 mm
+    touches = _measured_on_the_cmm(model, part, corner, tmp_path)
+    assert len(touches) == 16  # two sections of 8, none dropped
+    margin = load_profile(CMM).margin
+    for t in touches:  # each at least the margin (arc length) inside the arc's ends
+        phi = math.atan2(t.contact[1] - corner.origin[1], t.contact[0] - corner.origin[0])
+        assert arc[0] + margin / 3.0 - 1e-9 <= phi % (2 * math.pi) <= arc[1] - margin / 3.0 + 1e-9
 
 
 def test_a_shallow_engraving_is_the_parts_limit_said_plainly(shallow: Path) -> None:
