@@ -139,3 +139,27 @@ def test_a_shallow_engraving_is_the_parts_limit_said_plainly(shallow: Path) -> N
     for note in walls:
         assert ": blind, depth 0.600 mm: the ball reaches no section (it needs 0.800 mm " \
                "below one: radius 0.500 + margin 0.300): a smaller stylus [" in note, note
+
+
+def test_a_short_inner_arc_is_judged_on_the_ball_centres_the_cmm_fits() -> None:
+    """8 touches over 6 deg of a D6 bore with a D3 ball (what the margin alone at the
+    ends of a short arc can give: MetalBoop's front plate, R100): the contacts are off one
+    line, the ball centres (radius 1.5) are not, and the virtual CMM refuses the circle on
+    them; the planner refuses it first."""
+    from types import SimpleNamespace
+
+    from probegen.geometry.determined import undetermined
+    from probegen.planning.revolved import PathKind, PathPoint
+    from probegen.planning.well_posed import ill_posed
+
+    phi = np.radians(np.linspace(15.0, 21.0, 8))
+    ring = np.column_stack([np.cos(phi), np.sin(phi), np.zeros(8)])
+    contacts, normals, ball = 3.0 * ring, -ring, 1.5
+    z = (0.0, 0.0, 1.0)
+    assert undetermined("circle", contacts, z) == ""
+    assert "on one line" in undetermined("circle", contacts + ball * normals, z)
+    path = tuple(PathPoint(PathKind.TARGET, tuple(c + ball * n), 0, 0.0, k + 1, tuple(c),
+                           tuple(n)) for k, (c, n) in enumerate(zip(contacts, normals,
+                                                                    strict=True)))
+    plan = SimpleNamespace(path=path, sections=(SimpleNamespace(ball=ball),))
+    assert "on one line" in ill_posed("circle", SimpleNamespace(axis=z), plan)  # type: ignore[arg-type]
