@@ -176,26 +176,65 @@ def section_arcs(on: Callable[[float], bool], count: int,
     return tuple(sorted(arcs))
 
 
-def _reach(queries: _Queries, axis: Vec3, inner: bool, centre: FloatArray) -> str:
+def _reach(queries: _Queries, axis: Vec3, inner: bool, centre: FloatArray,
+           beside: Sequence[FloatArray] = ()) -> str:
     """Why a vertical probe cannot reach a section (empty when it can).
 
     A ray from a point in air that meets no face leaves the part, so the solid is
     classified only where the ray meets a face: at the centre, and just past the hit.
+    An inner section whose centre lies in material (the concave wall of a groove around
+    an island, a letter engraved in a face) is reached where its arcs are: the section
+    is reachable when the ray up from one of the points ``beside`` its arcs (in air just
+    inside the wall, :func:`_beside`) is open; the collision check of every planned move
+    stays the judge of the path.
     """
     if math.hypot(axis[0], axis[1]) > VERTICAL:
         return (f"axis ({axis[0]:.4f}, {axis[1]:.4f}, {axis[2]:.4f}) is not parallel to Z: "
                 "a vertical probe reaches only sections square to Z")
     if not inner:
         return ""
-    hits = queries.hits_up(centre)
+    why = _closed_above(queries, centre, "the centre")
+    if why != IN_MATERIAL or not beside:
+        return why
+    open_beside = any(not queries.exact.inside(p) and not _closed_above(queries, p, "")
+                      for p in beside)
+    return "" if open_beside else (
+        "the section's centre lies in material and no arc has open air above it")
+
+
+IN_MATERIAL = "the section's centre lies in material"
+
+
+def _closed_above(queries: _Queries, point: FloatArray, what: str) -> str:
+    """Why the ray up from ``point`` does not lead out of the part into the open (empty
+    when it does): ``point`` in material, or material over it (``what`` names it)."""
+    hits = queries.hits_up(point)
     if not hits:
         return ""
-    if queries.exact.inside(centre):
-        return "the section's centre lies in material"
+    if queries.exact.inside(point):
+        return IN_MATERIAL
     after = hits[1] if len(hits) > 1 else hits[0] + 2.0 * SAME_LENGTH
-    if queries.exact.inside(centre + np.array([0.0, 0.0, 0.5 * (hits[0] + after)])):
-        return f"closed above: material at z = {centre[2] + hits[0]:.4f} over the centre"
+    if queries.exact.inside(point + np.array([0.0, 0.0, 0.5 * (hits[0] + after)])):
+        return f"closed above: material at z = {point[2] + hits[0]:.4f} over {what}"
     return ""
+
+
+BESIDE_DEPTH = 0.5
+"""The point beside an arc lies this far inside the wall (at most a quarter of the
+radius), mm."""
+
+
+def _beside(feature: RevolvedFeature, centre: FloatArray, radius: float,
+            arcs: tuple[Arc, ...]) -> list[FloatArray]:
+    """A point in the air side of each partial arc of an inner section: at the arc's
+    middle azimuth, :data:`BESIDE_DEPTH` inside the wall (none for a full circle)."""
+    if arcs == FULL_CIRCLE or not feature.inner:
+        return []
+    frame = feature.frame()
+    inset = radius - min(BESIDE_DEPTH, 0.25 * radius)
+    middles = [0.5 * (a + b) for a, b in arcs]
+    return [centre + inset * (math.cos(phi) * frame[0] + math.sin(phi) * frame[1])
+            for phi in middles]
 
 
 class _Circle:
@@ -236,7 +275,8 @@ def _section(queries: _Queries, feature: RevolvedFeature, axial: float) -> Featu
         circle = _Circle(queries, feature, centre, radius)
         count = _sample_count(radius)
         arcs = section_arcs(circle, count, circle.samples(count))
-    reason = _reach(queries, feature.axis, feature.inner, centre)
+    reason = _reach(queries, feature.axis, feature.inner, centre,
+                    _beside(feature, centre, radius, arcs))
     if not arcs and not reason:
         reason = "no arc of the section lies on the feature's faces"
     return FeatureSection(axial, _vec3(centre), radius, feature.tilt_at(axial), arcs,

@@ -142,16 +142,34 @@ def collision_reason(problem: str) -> str:
 
 
 def _blind_depth(f: Any, part: Part) -> float | None:
-    """The depth of a vertical bore closed at its bottom (material just below the lower
-    end on the axis), mm; None for anything else."""
-    if not (f.inner and f.type == "cylinder" and abs(f.axis[2]) > 1.0 - 1e-9):
+    """The depth of a cylinder closed at one end only, mm (None for anything else): a
+    bore with a bottom, a boss rising from a floor, the wall of a shallow groove or of a
+    letter engraved in a face, along any axis.  An end is closed where the material lies
+    just past it, beside the wall on its air side (at the middle of the first arc of the
+    section: :data:`BLIND_PROBE` inside a bore's wall, outside a boss's)."""
+    if f.type != "cylinder":
         return None
     import numpy as np
 
-    ends = [np.asarray(f.centre_at(h)) for h in f.extent]
-    bottom = min(ends, key=lambda p: p[2])
-    below = bottom - np.array([0.0, 0.0, 0.05])
-    return f.length if part.exact.inside(below) else None
+    from probegen.geometry.frames import rotation_to_z
+
+    frame = rotation_to_z(f.axis)  # the azimuth frame of the feature's arcs
+    sections = getattr(f, "sections", ())
+    arcs = sections[0].arcs if sections else ()
+    phi = 0.5 * (arcs[0][0] + arcs[0][1]) if arcs else 0.0
+    inset = min(BLIND_PROBE, 0.25 * f.radius)
+    radial = (f.radius - inset if f.inner else f.radius + inset) * (
+        math.cos(phi) * frame[0] + math.sin(phi) * frame[1])
+    axis = np.asarray(f.axis)
+    low, high = f.extent
+    closed = [part.exact.inside(np.asarray(f.centre_at(h)) + radial + step * axis)
+              for h, step in ((low, -BLIND_PROBE), (high, BLIND_PROBE))]
+    return f.length if closed[0] != closed[1] else None
+
+
+BLIND_PROBE = 0.05
+"""How far past an end of a cylinder (and beside its wall) :func:`_blind_depth` looks for
+material, mm."""
 
 
 def _after(text: str, word: str) -> str:

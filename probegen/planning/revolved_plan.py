@@ -270,8 +270,7 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
         retract_only,)
     for retract in retracts:
         try:
-            plan = plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
-                                retract=retract, margin=machine.margin, clear_z=clearance_z)
+            plan = _plan_touches(sections, feature, machine, retract, clearance_z)
             safe = reroute(plan, sweeper)
         except RerouteError as exc:  # a CollisionError, itself a PlanningError
             errors.append(RerouteError(f"{feature.where}: {exc}"))
@@ -284,6 +283,42 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
         if not safe.dropped:
             break
     return best
+
+
+ARC_TOO_SHORT = "longer than twice the end margin"
+"""What :func:`probegen.planning.revolved_geometry.point_azimuths` says of an arc too short
+for its end margins."""
+
+
+def _plan_touches(sections: list[Section], feature: RevolvedSpec, machine: MachineProfile,
+                  retract: float, clearance_z: float) -> FeaturePlan:
+    """The touches and path of one choice of sections and retract: the end margin of a
+    partial arc the ball's radius and the margin (arc length), else, on an arc too short
+    for it, the margin alone.  The ball's radius keeps it off a face that meets the arc's
+    end at an angle; a face that continues the arc (the straight sides of a rounded
+    corner, the rest of a bore split into faces) needs none, and the collision check of
+    each touch (:func:`probegen.planning.reroute.reroute`) drops a touch that would meet
+    a face there.
+
+    Raises:
+        PlanningError: no plan; an arc too short for the margin alone: the reason with
+            the full end margin (the ball's, what the user can act on).
+    """
+    def plan(end_margin: float | None) -> FeaturePlan:
+        return plan_feature(sections, feature.points, ball=machine.probe.ball_radius,
+                            retract=retract, margin=machine.margin, clear_z=clearance_z,
+                            end_margin=end_margin)
+    try:
+        return plan(None)
+    except PlanningError as exc:
+        if ARC_TOO_SHORT not in str(exc):
+            raise
+        try:
+            return plan(machine.margin)
+        except PlanningError as short:
+            if ARC_TOO_SHORT in str(short):
+                raise exc from None
+            raise
 
 
 def _touches(plan: FeaturePlan) -> int:

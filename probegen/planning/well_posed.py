@@ -55,12 +55,14 @@ def ill_posed(kind: str, feature: Any, plan: FeaturePlan) -> str:
     pairs = [(p.contact, p.normal) for p in plan.path
              if p.normal is not None and p.contact is not None]
     contacts = np.array([c for c, _ in pairs], dtype=np.float64).reshape(-1, 3)
-    why = undetermined(kind, contacts, feature.axis)
-    if why:
-        return why
-    # the ball centres the CMM records and fits: the contacts out along the normals
-    normals = np.array([n for _, n in pairs], dtype=np.float64)
-    return unfit(kind, contacts + plan.sections[0].ball * normals, feature.axis)
+    # the ball centres the CMM records and fits: the contacts out along the normals (on
+    # a short inner arc they lie nearer a line than the contacts: the CMM's rule is
+    # applied to them too, sim.cmm does)
+    normals = np.array([n for _, n in pairs], dtype=np.float64).reshape(-1, 3)
+    centres = contacts + plan.sections[0].ball * normals
+    why = undetermined(kind, contacts, feature.axis) or undetermined(kind, centres,
+                                                                     feature.axis)
+    return why or unfit(kind, centres, feature.axis)
 
 
 def ill_posed_reason(kind: str, why: str) -> str:
