@@ -37,6 +37,10 @@ STEP_SLACK = 1e-9
 """Relative slack in ``ceil(Δφ/α_max)`` so that an exact multiple needs no extra point."""
 
 
+class ArcTooShortError(PlanningError):
+    """No arc of a section is longer than its two end margins (:func:`point_azimuths`)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Section:
     """One target section (the M2 input).
@@ -184,7 +188,7 @@ def point_azimuths(section: Section, n: int, *, end_margin: float,
     at both ends), spread evenly over each (one point: the middle).
 
     Raises:
-        PlanningError: no arc is longer than its two end margins.
+        ArcTooShortError: no arc is longer than its two end margins.
     """
     if section.full:
         return (tuple(phase + TWO_PI * k / n for k in range(n)),)
@@ -192,7 +196,7 @@ def point_azimuths(section: Section, n: int, *, end_margin: float,
     usable = [(a + inset, b - inset) for a, b in section.arcs]
     lengths = [b - a for a, b in usable]
     if not lengths or max(lengths) <= 0.0:
-        raise PlanningError(
+        raise ArcTooShortError(
             f"feature {section.feature}: section at {_fmt(section.centre)}: expected an "
             f"accessible arc longer than twice the end margin {end_margin:.3f} mm, found "
             f"arcs of {', '.join(f'{(b - a) * section.radius:.3f}' for a, b in section.arcs)}"

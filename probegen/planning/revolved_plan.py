@@ -26,6 +26,7 @@ from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
+from probegen.planning.revolved_geometry import ArcTooShortError
 from probegen.planning.setup import make_setup
 from probegen.planning.well_posed import IllPosedError, free_fit, ill_posed, ill_posed_reason
 from probegen.spec.model import RevolvedSpec, Spec
@@ -285,11 +286,6 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
     return best
 
 
-ARC_TOO_SHORT = "longer than twice the end margin"
-"""What :func:`probegen.planning.revolved_geometry.point_azimuths` says of an arc too short
-for its end margins."""
-
-
 def _plan_touches(sections: list[Section], feature: RevolvedSpec, machine: MachineProfile,
                   retract: float, clearance_z: float) -> FeaturePlan:
     """The touches and path of one choice of sections and retract: the end margin of a
@@ -310,15 +306,11 @@ def _plan_touches(sections: list[Section], feature: RevolvedSpec, machine: Machi
                             end_margin=end_margin)
     try:
         return plan(None)
-    except PlanningError as exc:
-        if ARC_TOO_SHORT not in str(exc):
-            raise
+    except ArcTooShortError as exc:
         try:
             return plan(machine.margin)
-        except PlanningError as short:
-            if ARC_TOO_SHORT in str(short):
-                raise exc from None
-            raise
+        except ArcTooShortError:
+            raise exc from None
 
 
 def _touches(plan: FeaturePlan) -> int:
