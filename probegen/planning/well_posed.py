@@ -1,15 +1,26 @@
-"""Touches a CMM can fit: the planner's side of the free-fit rule.
+"""Touches the evaluation can use: the planner's side of the evaluation's rules.
 
-A DMIS program goes to a CMM that fits every measured feature freely
-(``Dialect.FREE_FIT``): the touches of a revolved feature must determine it
-(:func:`probegen.geometry.determined.undetermined`: a cone or cylinder in two sections, a
-sphere off one circle, a torus in three tube positions, a circle of three points).  The
-revolved planner (:func:`probegen.planning.revolved_plan.plan_revolved`) prefers, for
-such a target, the choice of sections that is well posed and refuses the feature when
-none is (a ``PlanningError`` with :func:`ill_posed_reason`: another stylus is tried, and
-``--all-revolved`` leaves the feature out with that line), so no ill-posed feature is
-written.  A Macro B program is fitted by probegen from the nominal and keeps what it
-plans.
+Every revolved feature the planner keeps must be evaluable from the touches it plans
+(:func:`unevaluable`), on every dialect:
+
+* probegen's evaluation of a Macro B log fits from the nominal and leaves a feature NOT
+  EVALUATED below its *complete measurement* (:func:`probegen.geometry.determined.incomplete`:
+  enough touches, sections, and touches in each section of a cylinder or a cone); the
+  planner applies the same rule to the touches the collision check leaves, whatever
+  the dialect;
+* a DMIS program goes to a CMM that fits every measured feature freely
+  (``Dialect.FREE_FIT``): the touches must also determine it
+  (:func:`probegen.geometry.determined.undetermined`: a cone or cylinder in two
+  sections, a sphere off one circle, a torus in three tube positions, a circle of three
+  points) and their free fit must succeed (:func:`~probegen.geometry.determined.unfit`).
+
+The dialect that writes the program decides (:func:`free_fit`: the profile's dialect, as
+``plan_program`` hands it the spec's, which ``compile -d`` and ``plan -d`` set).  The
+revolved planner (:func:`probegen.planning.revolved_plan.plan_revolved`) prefers the
+choice of sections whose touches are evaluable and refuses the feature when none is (a
+``PlanningError`` with :func:`refused_reason`: another stylus and orientation are tried,
+and ``--all-revolved`` leaves the feature out with that line), so no feature is written
+whose result cannot come out.
 """
 
 from __future__ import annotations
@@ -19,14 +30,15 @@ from typing import Any
 import numpy as np
 
 from probegen.errors import PlanningError
-from probegen.geometry.determined import undetermined, unfit
+from probegen.geometry.determined import incomplete, undetermined, unfit
 from probegen.machine.profile import MachineProfile
 from probegen.planning.revolved import FeaturePlan
 
 
 class IllPosedError(PlanningError):
-    """A revolved feature whose touches do not determine it, for a target that fits
-    freely (:func:`ill_posed_reason`)."""
+    """A revolved feature whose planned touches cannot be evaluated: too few for the
+    evaluation, or, for a target that fits freely, not determining it
+    (:func:`refused_reason`)."""
 
 
 def fits_freely(dialect: str) -> bool:
@@ -63,8 +75,28 @@ def ill_posed(kind: str, feature: Any, plan: FeaturePlan) -> str:
     return unfit(kind, contacts + plan.sections[0].ball * normals, feature.axis)
 
 
-def ill_posed_reason(kind: str, why: str) -> str:
-    """The sentence of a feature refused for a CMM, with what the user can do."""
+def unevaluable(kind: str, feature: Any, plan: FeaturePlan, free: bool) -> str:
+    """Why the touches of ``plan`` cannot be evaluated, or ``""``: too few for a complete
+    measurement (:func:`~probegen.geometry.determined.incomplete`, every dialect), then,
+    when the target fits freely (``free``, :func:`free_fit`), :func:`ill_posed`."""
+    why = incomplete(kind, [p.section for p in plan.path
+                            if p.normal is not None and p.contact is not None])
+    if why:
+        return f"{TOO_FEW}{why}"
+    return ill_posed(kind, feature, plan) if free else ""
+
+
+TOO_FEW = "too few touches to evaluate it: "
+"""How :func:`unevaluable` starts the reason of a feature below the complete measurement."""
+
+
+def refused_reason(kind: str, why: str) -> str:
+    """The sentence of a feature refused for ``why`` (:func:`unevaluable`), with what the
+    user can do."""
+    if why.startswith(TOO_FEW):
+        return (f"{kind}: {why}: give more points or sections (points = N, sections = "
+                "[...]) where the part lets the probe reach them, or another stylus, "
+                "orientation or a setup")
     return (f"{kind}: {why}: a CMM fits it freely from the touches; where the part lets "
             "the probe reach more sections, give them (sections = [...]), another "
             "orientation or a setup")
