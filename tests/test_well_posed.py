@@ -112,7 +112,7 @@ def test_a_cone_with_one_reachable_section_is_left_out_not_written() -> None:
                         None)
     machine = load_profile(REPO / "samples/machines/cmm.toml")
     why = r"cone: too few touches to evaluate it: \d touches in 1 sections \(at least 7 " \
-        r"needed, in 2 sections\): give more points or sections"
+        r"needed, in 2 sections\); give more points or sections"
     with pytest.raises(PlanningError, match=why):
         plan_revolved(spec, part, machine, 100.0)
     fanuc = replace(machine, dialect="fanuc", head=None, rack=())

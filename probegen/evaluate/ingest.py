@@ -264,6 +264,9 @@ def ingest(log_path: str | Path, spec: Spec, *,
     """
     from probegen.planning import part_of, plan_program
     from probegen.planning.identity import planned_touches
+    from probegen.planning.well_posed import for_log
+
+    spec = for_log(spec)  # a DPRNT log: planned as its Macro B program was
 
     calibration = for_stylus(calibration or spec.machine.calibration,
                              spec.machine.probe.ball_radius, f"{spec.source}: [machine]")

@@ -25,6 +25,8 @@ whose result cannot come out.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -33,6 +35,7 @@ from probegen.errors import PlanningError
 from probegen.geometry.determined import incomplete, undetermined, unfit
 from probegen.machine.profile import MachineProfile
 from probegen.planning.revolved import FeaturePlan
+from probegen.spec.model import Spec
 
 
 class IllPosedError(PlanningError):
@@ -50,8 +53,45 @@ def fits_freely(dialect: str) -> bool:
 
 
 def free_fit(machine: MachineProfile) -> bool:
-    """Whether the profile's programs are fitted freely (its dialect, :func:`fits_freely`)."""
+    """Whether the profile's programs are fitted freely (its dialect, :func:`fits_freely`;
+    the planner is handed the profile with the dialect that writes the program,
+    :func:`for_dialect`)."""
     return fits_freely(machine.dialect)
+
+
+def for_dialect(spec: Spec, dialect: str) -> Spec:
+    """``spec`` as a program in ``dialect`` is planned: the spec's dialect and its
+    profile's set to ``dialect``, so the dialect that writes the program decides the
+    rules of :func:`unevaluable` (``compile -d dmis`` of a spec on a Fanuc profile is
+    checked for a CMM's free fit), not the profile's; ``spec`` itself when both are
+    already ``dialect``."""
+    if spec.dialect == dialect and spec.machine.dialect == dialect:
+        return spec
+    return replace(spec, dialect=dialect, machine=with_dialect(spec.machine, dialect))
+
+
+def with_dialect(machine: MachineProfile, dialect: str) -> MachineProfile:
+    """``machine`` planning for programs in ``dialect`` (itself when it is its own)."""
+    return machine if machine.dialect == dialect else replace(machine, dialect=dialect)
+
+
+def strictest(dialects: Sequence[str], default: str) -> str:
+    """The dialect whose rules a plan for all of ``dialects`` must meet: the first that
+    fits freely (its rules include the others'), else the first; ``default`` (the
+    profile's) when none is given.  ``plan --all-revolved -d fanuc -d dmis`` chooses the
+    features both programs can evaluate."""
+    return next((d for d in dialects if fits_freely(d)), dialects[0] if dialects else default)
+
+
+def for_log(spec: Spec) -> Spec:
+    """``spec`` as the program that printed a DPRNT log was planned: in the spec's
+    dialect, or, where that one prints no such log (DMIS, which fits freely), in the
+    profile's Macro B dialect (``fanuc`` for a CMM's profile): ``compile -d fanuc`` of a
+    DMIS spec planned it so (:func:`for_dialect`)."""
+    if not fits_freely(spec.dialect):
+        return for_dialect(spec, spec.dialect)
+    return for_dialect(spec, "fanuc" if fits_freely(spec.machine.dialect)
+                       else spec.machine.dialect)
 
 
 def ill_posed(kind: str, feature: Any, plan: FeaturePlan) -> str:
@@ -93,9 +133,9 @@ TOO_FEW = "too few touches to evaluate it: "
 def refused_reason(kind: str, why: str) -> str:
     """The sentence of a feature refused for ``why`` (:func:`unevaluable`), with what the
     user can do."""
-    if why.startswith(TOO_FEW):
-        return (f"{kind}: {why}: give more points or sections (points = N, sections = "
-                "[...]) where the part lets the probe reach them, or another stylus, "
+    if why.startswith(TOO_FEW):  # no ": " after the counts: pick_stylus quotes from them
+        return (f"{kind}: {why}; give more points or sections where the part lets the "
+                "probe reach them (points = N, sections = [...]), or another stylus, "
                 "orientation or a setup")
     return (f"{kind}: {why}: a CMM fits it freely from the touches; where the part lets "
             "the probe reach more sections, give them (sections = [...]), another "
