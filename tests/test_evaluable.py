@@ -115,7 +115,8 @@ def stand_in(monkeypatch: pytest.MonkeyPatch) -> str:
     """Every feature ill posed for a target that fits freely (a stand-in for a CMM's free
     fit refusing it): which dialect's rule the planner applies shows."""
     reason = "a stand-in free-fit refusal"
-    monkeypatch.setattr(well_posed, "ill_posed", lambda *_: reason)
+    monkeypatch.setattr(well_posed, "ill_posed",
+                        lambda kind, feature, plan, free=True: reason if free else "")
     return reason
 
 

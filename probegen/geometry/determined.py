@@ -143,8 +143,10 @@ def _count(n: int, word: str) -> str:
 
 
 def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
-    """Why the free fit of exact ``points`` (the ball centres a plan will record) fails,
-    or ``""``: the fit a CMM runs, started from ``axis``, refuses points that determine
+    """Why the fit of exact ``points`` (the ball centres a plan will record) fails, or
+    ``""``: the fit a CMM runs, started from ``axis``, which is also probegen's own fit
+    from the nominal (``fits_nominal.fit_near`` keeps the solution from the nominal
+    axis; a circle's and a sphere's fit has one optimum), refuses points that determine
     the shape in theory but too weakly (two sections of a cone, each a degree of arc:
     condition number 8e8), or converges to another shape than the nominal's axis.
 
@@ -168,12 +170,12 @@ def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
             else:
                 found = fit_torus(p, axis, nearest=axis is not None)
             if axis is not None and abs(float(unit(found.axis) @ unit(axis))) < AXIS_AGREES:
-                return f"the free {kind} fit of the planned touches ends off the nominal axis"
+                return f"the {kind} fit of the planned touches ends off the nominal axis"
             condition = found.condition
     except ProbegenError as exc:
         return str(exc)
     if not condition <= PLANNED_CONDITION:
-        return (f"the free {kind} fit of the planned touches is ill-conditioned (condition "
+        return (f"the {kind} fit of the planned touches is ill-conditioned (condition "
                 f"number {condition:.1e}, a planned feature keeps below "
                 f"{PLANNED_CONDITION:.0e}): too short an arc or too close sections")
     return ""

@@ -344,7 +344,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         raise errors[own - 1 if own else 0]
     chosen, safe, why = best
     if why:
-        raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why)}")
+        raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free)}")
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 

@@ -5,14 +5,16 @@ Every revolved feature the planner keeps must be evaluable from the touches it p
 
 * probegen's evaluation of a Macro B log fits from the nominal and leaves a feature NOT
   EVALUATED below its *complete measurement* (:func:`probegen.geometry.determined.incomplete`:
-  enough touches, sections, and touches in each section of a cylinder or a cone); the
-  planner applies the same rule to the touches the collision check leaves, whatever
-  the dialect;
+  enough touches, sections, and touches in each section of a cylinder or a cone) or
+  when its fit fails; the planner applies the same rule to the touches the collision
+  check leaves, and runs the fit on their exact ball centres
+  (:func:`~probegen.geometry.determined.unfit`, well conditioned with a margin),
+  whatever the dialect;
 * a DMIS program goes to a CMM that fits every measured feature freely
   (``Dialect.FREE_FIT``): the touches must also determine it
   (:func:`probegen.geometry.determined.undetermined`: a cone or cylinder in two
   sections, a sphere off one circle, a torus in three tube positions, a circle of three
-  points) and their free fit must succeed (:func:`~probegen.geometry.determined.unfit`).
+  points).
 
 The dialect that writes the program decides (:func:`free_fit`: the profile's dialect, as
 ``plan_program`` hands it the spec's, which ``compile -d`` and ``plan -d`` set).  The
@@ -94,49 +96,54 @@ def for_log(spec: Spec) -> Spec:
                        else spec.machine.dialect)
 
 
-def ill_posed(kind: str, feature: Any, plan: FeaturePlan) -> str:
-    """Why the touches of ``plan`` do not determine a spec feature of ``kind`` in a free
-    fit, or ``""``.
+def ill_posed(kind: str, feature: Any, plan: FeaturePlan, free: bool = True) -> str:
+    """Why the fit of the touches of ``plan`` would not give a spec feature of ``kind``,
+    or ``""``: for a target that fits freely (``free``) the touches must determine it
+    (:func:`~probegen.geometry.determined.undetermined`); on every target the fit of the
+    exact ball centres must succeed well conditioned on the nominal axis
+    (:func:`~probegen.geometry.determined.unfit`: the fit a CMM runs, and probegen's
+    from the nominal, which starts from the same axis).
 
     Args:
         kind: the spec kind (``circle``, ``cylinder``, ``cone``, ``sphere``, ``torus``).
         feature: the recognised feature (``cad.revolved.RevolvedFeature``: its ``axis``,
             in the plan's frame).
         plan: the planned touches (``PathPoint.contact`` of each touch).
+        free: the target fits freely (:func:`free_fit`).
     """
     pairs = [(p.contact, p.normal) for p in plan.path
              if p.normal is not None and p.contact is not None]
     contacts = np.array([c for c, _ in pairs], dtype=np.float64).reshape(-1, 3)
-    why = undetermined(kind, contacts, feature.axis)
+    why = undetermined(kind, contacts, feature.axis) if free else ""
     if why:
         return why
     # the ball centres the CMM records and fits: the contacts out along the normals
-    normals = np.array([n for _, n in pairs], dtype=np.float64)
+    normals = np.array([n for _, n in pairs], dtype=np.float64).reshape(-1, 3)
     return unfit(kind, contacts + plan.sections[0].ball * normals, feature.axis)
 
 
 def unevaluable(kind: str, feature: Any, plan: FeaturePlan, free: bool) -> str:
     """Why the touches of ``plan`` cannot be evaluated, or ``""``: too few for a complete
-    measurement (:func:`~probegen.geometry.determined.incomplete`, every dialect), then,
-    when the target fits freely (``free``, :func:`free_fit`), :func:`ill_posed`."""
+    measurement (:func:`~probegen.geometry.determined.incomplete`), then
+    :func:`ill_posed` (``free``: the target fits freely, :func:`free_fit`)."""
     why = incomplete(kind, [p.section for p in plan.path
                             if p.normal is not None and p.contact is not None])
     if why:
         return f"{TOO_FEW}{why}"
-    return ill_posed(kind, feature, plan) if free else ""
+    return ill_posed(kind, feature, plan, free)
 
 
 TOO_FEW = "too few touches to evaluate it: "
 """How :func:`unevaluable` starts the reason of a feature below the complete measurement."""
 
 
-def refused_reason(kind: str, why: str) -> str:
-    """The sentence of a feature refused for ``why`` (:func:`unevaluable`), with what the
-    user can do."""
+def refused_reason(kind: str, why: str, free: bool) -> str:
+    """The sentence of a feature refused for ``why`` (:func:`unevaluable`; ``free``: for
+    a target that fits freely), with what the user can do."""
     if why.startswith(TOO_FEW):  # no ": " after the counts: pick_stylus quotes from them
         return (f"{kind}: {why}; give more points or sections where the part lets the "
                 "probe reach them (points = N, sections = [...]), or another stylus, "
                 "orientation or a setup")
-    return (f"{kind}: {why}: a CMM fits it freely from the touches; where the part lets "
-            "the probe reach more sections, give them (sections = [...]), another "
-            "orientation or a setup")
+    fits = "a CMM fits it freely" if free else "probegen fits it"
+    return (f"{kind}: {why}: {fits} from the touches; where the part lets the probe reach "
+            "more sections, give them (sections = [...]), another orientation or a setup")
