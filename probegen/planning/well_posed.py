@@ -85,6 +85,14 @@ def strictest(dialects: Sequence[str], default: str) -> str:
     return next((d for d in dialects if fits_freely(d)), dialects[0] if dialects else default)
 
 
+def for_every_dialect(machine: MachineProfile) -> MachineProfile:
+    """``machine`` planning for a spec that compiles in every dialect (``init``'s
+    skeleton): with the :func:`strictest` of them."""
+    from probegen.dialects import REGISTRY
+
+    return with_dialect(machine, strictest(sorted(REGISTRY), machine.dialect))
+
+
 def for_log(spec: Spec) -> Spec:
     """``spec`` as the program that printed a DPRNT log was planned: in the spec's
     dialect, or, where that one prints no such log (DMIS, which fits freely), in the
