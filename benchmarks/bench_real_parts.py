@@ -209,6 +209,7 @@ def eligibility(part: Any, machine: Any) -> tuple[set[int], set[int], set[int]]:
 # ------------------------------------------------------------------ reasons
 
 REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("too few touches", ("too few touches to evaluate",)),
     ("free fit", ("a free ",)),
     ("head grid", ("deg grid",)),
     ("orientation", ("not along the probe", "needs an orientation", "faces down",

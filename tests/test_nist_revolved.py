@@ -38,7 +38,9 @@ def _need(path: Path) -> Path:
 @pytest.mark.parametrize(("model", "planned", "unsafe"), [
     (NIST / "nist_ftc_11_asme1_rb.stp", 3, 0),
     (NIST / "nist_ctc_03_asme1_rc.stp", 20, 0),
-    (DCX, 35, 3),  # 33 before a short arc was tried with the margin alone at its ends
+    # 33 before: +2 short arcs tried with the margin alone at their ends, -4 tori of two
+    # tube positions refused (below)
+    (DCX, 31, 3),
 ])
 def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
                                                   unsafe: int) -> None:
@@ -57,6 +59,11 @@ def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
     assert len(left) == unsafe
     assert all(re.search(r"approach from \(.+\) to \(.+\): the stylus (ball|shank) .+ "
                          r"face \d+", n) for n in left)
+    # DCX: four tori whose third tube position the 6 mm ball cannot reach; ingest would
+    # leave them NOT EVALUATED (a torus needs three), so they are not written
+    few = [n.split()[0] for n in notes if "too few touches to evaluate it: 16 touches in 2 "
+           "sections (at least 8 needed, in 3 sections)" in n]
+    assert few == (["R26", "R27", "R41", "R42"] if model == DCX else [])
     touches = sum(len(p.normals) for p in result.revolved)
     text = get_dialect("fanuc").generate(result.program)
     vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),

@@ -93,9 +93,10 @@ def test_a_torus_from_three_partial_sections_fits_from_the_nominal_axis() -> Non
     assert fit.centre == pytest.approx((-41.0, 40.3, 36.5), abs=1e-6)
 
 
-def test_a_dmis_cone_with_one_reachable_section_is_left_out_not_written() -> None:
-    """The planner refuses, for DMIS, a cone whose touches lie in one section (the spec
-    forces one), and keeps it for Fanuc, whose log probegen fits from the nominal."""
+def test_a_cone_with_one_reachable_section_is_left_out_not_written() -> None:
+    """The planner refuses a cone whose touches lie in one section (the spec forces one),
+    for DMIS and for Fanuc alike: probegen's evaluation of a Macro B log needs two
+    sections of a cone as a CMM's free fit does (it would be NOT EVALUATED)."""
     from dataclasses import replace
 
     from probegen.errors import PlanningError
@@ -110,10 +111,13 @@ def test_a_dmis_cone_with_one_reachable_section_is_left_out_not_written() -> Non
     spec = RevolvedSpec("C1", "test", "cone", cone.faces[0], None, (0.5 * cone.length,), 8,
                         None)
     machine = load_profile(REPO / "samples/machines/cmm.toml")
-    with pytest.raises(PlanningError, match="a free cone fit needs"):
+    why = r"cone: too few touches to evaluate it: \d touches in 1 sections \(at least 7 " \
+        r"needed, in 2 sections\); give more points or sections"
+    with pytest.raises(PlanningError, match=why):
         plan_revolved(spec, part, machine, 100.0)
     fanuc = replace(machine, dialect="fanuc", head=None, rack=())
-    assert len(plan_revolved(spec, part, fanuc, 100.0).plan.sections) == 1
+    with pytest.raises(PlanningError, match=why):
+        plan_revolved(spec, part, fanuc, 100.0)
 
 
 @pytest.mark.skipif(not PARTS.is_dir(), reason="../shared/ref/parts is not there")

@@ -22,6 +22,7 @@ def _compile(args: argparse.Namespace) -> int:
     from probegen.dialects import get_dialect
     from probegen.planning import check_options, part_of
     from probegen.planning.setups import plan_setups, setup_file
+    from probegen.planning.well_posed import for_dialect
     from probegen.spec.model import load_spec
 
     spec = with_calibration(load_spec(args.spec), args.calibration)
@@ -40,7 +41,8 @@ def _compile(args: argparse.Namespace) -> int:
         if part is None:
             part = part_of(spec)  # loaded once, for every dialect
         with Bar(f"planning for {name}", unit="steps") as bar:
-            setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES,
+            setups = plan_setups(for_dialect(spec, name),
+                                 runtime_variables=dialect.RUNTIME_VARIABLES,
                                  progress=bar, part=part)
         target = None
         if args.output == "-" and len(setups) > 1:
@@ -264,10 +266,13 @@ def _plan(args: argparse.Namespace) -> int:
     if args.all_revolved:
         from probegen.cad import load_part
         from probegen.machine.profile import load_profile
+        from probegen.planning.well_posed import strictest, with_dialect
 
         if not args.machine:
             raise ProbegenError("plan --all-revolved: expected --machine PROFILE, found none")
-        machine = load_profile(args.machine)
+        # the features every program of -d can evaluate (well_posed.strictest)
+        loaded = load_profile(args.machine)
+        machine = with_dialect(loaded, strictest(args.dialect or (), loaded.dialect))
         part = load_part(args.input)
         spec, notes = all_revolved_setups(part, machine)
     else:
@@ -357,13 +362,15 @@ def _write_programs(args: argparse.Namespace, spec: Any, part: Part | None,
     listed with their reasons in a comment block at its head."""
     from probegen.dialects import get_dialect
     from probegen.planning.setups import plan_setups, setup_file
+    from probegen.planning.well_posed import for_dialect
 
     names = args.dialect or [spec.dialect]
     spec.machine.check_program_number(spec.program_number, f"{args.input}: program number")
     stem = Path(args.input).stem
     for name in names:
         dialect = get_dialect(name)
-        setups = plan_setups(spec, runtime_variables=dialect.RUNTIME_VARIABLES, part=part)
+        setups = plan_setups(for_dialect(spec, name), runtime_variables=dialect.RUNTIME_VARIABLES,
+                             part=part)
         first = _target(args.output, stem, dialect.EXTENSION, len(names))
         for k, (sp, planned) in enumerate(setups):
             target = Path(setup_file(str(first), sp, k == 0))

@@ -42,7 +42,7 @@ from probegen.evaluate.freeform import (
     evaluate_freeform,
 )
 from probegen.evaluate.planar import PlanarResult, evaluate_planar
-from probegen.evaluate.revolved import MIN_SECTIONS, Nominal, RevolvedResult, evaluate_revolved
+from probegen.evaluate.revolved import Nominal, RevolvedResult, evaluate_revolved
 from probegen.evaluate.run_identity import (
     IdentityOptions,
     RunIdentity,
@@ -50,6 +50,7 @@ from probegen.evaluate.run_identity import (
     run_identity,
 )
 from probegen.evaluate.sphere_test import SphereTestResult, evaluate_sphere_test
+from probegen.geometry.determined import incomplete
 from probegen.geometry.fits_solver import vec3
 from probegen.geometry.uncertainty import Budget, few_dof_note
 from probegen.ir import frames
@@ -73,10 +74,6 @@ Vec3 = tuple[float, float, float]
 
 MIN_POINTS = 5
 """Fewest touches a sphere test is evaluated from (4 determine a sphere; one more checks)."""
-REVOLVED_MIN_POINTS = {"circle": 4, "cylinder": 6, "cone": 7, "sphere": 5, "torus": 8}
-"""Fewest touches each revolved kind is evaluated from: one more than its fit's
-parameters (circle 3 in its plane, cylinder 5, cone 6, sphere 4, torus 7), so at least
-one touch checks the form."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -268,6 +265,9 @@ def ingest(log_path: str | Path, spec: Spec, *,
     """
     from probegen.planning import part_of, plan_program
     from probegen.planning.identity import planned_touches
+    from probegen.planning.well_posed import for_log
+
+    spec = for_log(spec)  # a DPRNT log: planned as its Macro B program was
 
     calibration = for_stylus(calibration or spec.machine.calibration,
                              spec.machine.probe.ball_radius, f"{spec.source}: [machine]")
@@ -549,13 +549,12 @@ def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches
     nominal = nominal_in_work(nominal_of(plan), rotation)
     names = _revolved_names(feature, len(nominal.sections))
     reason = gaps.reason(feature.id, indices)
-    least, sections = REVOLVED_MIN_POINTS[feature.kind], MIN_SECTIONS[feature.kind]
     which = [plan.section_of_touch[k] for k in found]
-    if len(found) < least or len(set(which)) < sections:
-        notes.append(f"feature {feature.id}: not evaluated, {len(found)} touches in "
-                     f"{len(set(which))} sections (at least {least} needed"
-                     f"{f', in {sections} sections' if sections > 1 else ''})")
-        return _judge(feature.id, feature.kind, reason, names, None)
+    few = incomplete(feature.kind, which)  # the planner's rule too (well_posed)
+    if few:
+        notes.append(f"feature {feature.id}: not evaluated, {few}")
+        return _judge(feature.id, feature.kind, reason or f"too few touches: {few}", names,
+                      None)
     outcome = _judge(feature.id, feature.kind, reason, names, lambda: evaluate_revolved(
         feature.id, nominal, [frames.apply(rotation, touches[(feature.id, k)])
                               for k in found], which,

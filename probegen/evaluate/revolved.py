@@ -82,6 +82,7 @@ from probegen.errors import ProbegenError
 from probegen.evaluate.characteristics import Characteristic, accepted
 from probegen.evaluate.uncertainty import FittedShape, uncertainties
 from probegen.geometry import minimum_zone
+from probegen.geometry.determined import EVALUATED_SECTIONS
 from probegen.geometry.fits import (
     Circle3dFit,
     ConeFit,
@@ -98,9 +99,6 @@ from probegen.machine.calibration import ProbeCalibration, calibrated_centres
 Vec3 = tuple[float, float, float]
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-MIN_SECTIONS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 3}
-"""Fewest sections (distinct section planes) each kind is evaluated from."""
 
 
 class Limits(Protocol):
@@ -238,9 +236,9 @@ def evaluate_revolved(feature: str, nominal: Nominal, ball_centres: ArrayLike,
     c = np.asanyarray(ball_centres, dtype=np.float64).reshape(-1, 3)
     k = np.asanyarray(sections, dtype=np.int64).reshape(-1)
     found = len(set(k.tolist()))
-    if found < MIN_SECTIONS[nominal.kind]:
+    if found < EVALUATED_SECTIONS[nominal.kind]:
         raise ProbegenError(f"feature {feature}: a {nominal.kind} needs touches in at least "
-                            f"{MIN_SECTIONS[nominal.kind]} sections, found {found}")
+                            f"{EVALUATED_SECTIONS[nominal.kind]} sections, found {found}")
     v0 = np.asarray(nominal.axis, dtype=np.float64)
     sign = 1.0 if nominal.ball_inside else -1.0  # surface size = ball size + sign·r
     if isinstance(ball_radius, ProbeCalibration):

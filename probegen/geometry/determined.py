@@ -26,10 +26,21 @@ These are what the points must have for the fit to be determined at all, not a
 programmer's good practice (sections far apart, points spread around): the virtual CMM
 refuses what no CMM can fit, and the planner never writes it.
 
+probegen's own evaluation (``ingest`` of a Macro B log, fitted from the nominal) has its
+rule of a *complete measurement* (:func:`incomplete`), on the section of each touch: at
+least one touch more than the fit's unknowns (:data:`EVALUATED_POINTS`), the sections of
+:data:`EVALUATED_SECTIONS`, and for a cylinder or a cone :data:`SECTION_POINTS` touches
+in every section (each section's diameter and roundness are a circle fitted there).  The
+evaluation leaves a feature that breaks it NOT EVALUATED; the planner, for every
+dialect, refuses to plan one (``planning/well_posed.py``): one rule, here, for both.
+
 Lengths in mm.
 """
 
 from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -132,8 +143,10 @@ def _count(n: int, word: str) -> str:
 
 
 def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
-    """Why the free fit of exact ``points`` (the ball centres a plan will record) fails,
-    or ``""``: the fit a CMM runs, started from ``axis``, refuses points that determine
+    """Why the fit of exact ``points`` (the ball centres a plan will record) fails, or
+    ``""``: the fit a CMM runs, started from ``axis``, which is also probegen's own fit
+    from the nominal (``fits_nominal.fit_near`` keeps the solution from the nominal
+    axis; a circle's and a sphere's fit has one optimum), refuses points that determine
     the shape in theory but too weakly (two sections of a cone, each a degree of arc:
     condition number 8e8), or converges to another shape than the nominal's axis.
 
@@ -157,12 +170,12 @@ def unfit(kind: str, points: ArrayLike, axis: ArrayLike | None) -> str:
             else:
                 found = fit_torus(p, axis, nearest=axis is not None)
             if axis is not None and abs(float(unit(found.axis) @ unit(axis))) < AXIS_AGREES:
-                return f"the free {kind} fit of the planned touches ends off the nominal axis"
+                return f"the {kind} fit of the planned touches ends off the nominal axis"
             condition = found.condition
     except ProbegenError as exc:
         return str(exc)
     if not condition <= PLANNED_CONDITION:
-        return (f"the free {kind} fit of the planned touches is ill-conditioned (condition "
+        return (f"the {kind} fit of the planned touches is ill-conditioned (condition "
                 f"number {condition:.1e}, a planned feature keeps below "
                 f"{PLANNED_CONDITION:.0e}): too short an arc or too close sections")
     return ""
@@ -178,3 +191,41 @@ the limit, the virtual CMM's fit of its recorded touches ended at 2.7e8)."""
 
 AXIS_AGREES = 0.9998
 """The cosine (1 deg) within which the fit of exact touches must find the nominal axis."""
+
+
+EVALUATED_POINTS = {"circle": 4, "cylinder": 6, "cone": 7, "sphere": 5, "torus": 8}
+"""Fewest touches each revolved kind is evaluated from: one more than its fit's
+parameters (circle 3 in its plane, cylinder 5, cone 6, sphere 4, torus 7), so at least
+one touch checks the form."""
+EVALUATED_SECTIONS = {"circle": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 3}
+"""Fewest sections (distinct section planes) each kind is evaluated from."""
+SECTION_POINTS = 3
+"""Fewest touches in each section of a cylinder or a cone (its ``D_Sk`` and ``RON_Sk``:
+a circle fitted in the section)."""
+PER_SECTION = ("cylinder", "cone")
+"""The kinds whose every section is fitted on its own."""
+
+
+def incomplete(kind: str, sections: Sequence[int]) -> str:
+    """Why touches in ``sections`` are too few for probegen's evaluation of a ``kind``
+    (a complete measurement), or ``""``: the rule ``ingest`` applies to the touches it
+    reads and the planner to the touches it keeps.
+
+    Args:
+        kind: ``circle``, ``cylinder``, ``cone``, ``sphere`` or ``torus``.
+        sections: the 0-based section of each touch.
+
+    Returns:
+        ``""``, or a sentence such as "2 touches in 1 sections (at least 4 needed)".
+    """
+    counts = Counter(int(k) for k in sections)
+    n, least, need = len(sections), EVALUATED_POINTS[kind], EVALUATED_SECTIONS[kind]
+    if n < least or len(counts) < need:
+        return (f"{n} touches in {len(counts)} sections (at least {least} needed"
+                f"{f', in {need} sections' if need > 1 else ''})")
+    thin = sorted(j for j, c in counts.items() if c < SECTION_POINTS)
+    if kind in PER_SECTION and thin:
+        return (f"{counts[thin[0]]} touches in section {thin[0] + 1} (at least "
+                f"{SECTION_POINTS} needed in each section of a {kind}: its diameter and "
+                "roundness there)")
+    return ""

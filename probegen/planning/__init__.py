@@ -54,6 +54,7 @@ from probegen.planning.travel import (
     stop_of,
     tour_figures,
 )
+from probegen.planning.well_posed import for_dialect
 from probegen.spec.actions import PlanarSpec
 from probegen.spec.model import FreeformSpec, RevolvedSpec, Spec, SphereTest
 
@@ -121,7 +122,12 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
         SpecError: a value the geometry rules out (e.g. a retract below the safe minimum).
         ModelError: the model or the referenced face is unusable.
         CollisionError: a move would bring the stylus into the part.
+
+    The spec's dialect (``[machine] dialect``, or what ``compile -d`` set with
+    :func:`~probegen.planning.well_posed.for_dialect`) decides which touches are
+    evaluable (:mod:`probegen.planning.well_posed`), not the profile's.
     """
+    spec = for_dialect(spec, spec.dialect)
     machine = spec.machine
     if part is None:
         part = part_of(spec)

@@ -28,7 +28,7 @@ from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
 from probegen.planning.revolved_geometry import ArcTooShortError
 from probegen.planning.setup import make_setup
-from probegen.planning.well_posed import IllPosedError, free_fit, ill_posed, ill_posed_reason
+from probegen.planning.well_posed import IllPosedError, free_fit, refused_reason, unevaluable
 from probegen.spec.model import RevolvedSpec, Spec
 
 if TYPE_CHECKING:
@@ -356,7 +356,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         own = own if k else len(errors)
         if safe is None:
             continue
-        why = ill_posed(feature.kind, candidate.feature, safe.plan) if free else ""
+        why = unevaluable(feature.kind, candidate.feature, safe.plan, free)
         if best is None or (not why, _touches(safe.plan)) > (not best[2],
                                                               _touches(best[1].plan)):
             notes = safe.notes if not k else (
@@ -371,7 +371,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         raise errors[own - 1 if own else 0]
     chosen, safe, why = best
     if why:
-        raise IllPosedError(f"{feature.where}: {ill_posed_reason(feature.kind, why)}")
+        raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free)}")
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
 
 

@@ -77,11 +77,15 @@ class Skeleton:
 
 def skeleton(part: Part, machine: MachineProfile) -> Skeleton:
     """Every recognised feature of ``part`` that compiles alone on ``machine``, and the
-    ones left out with their reasons (revolved, then planes, then free-form faces)."""
+    ones left out with their reasons (revolved, then planes, then free-form faces).  The
+    revolved features are those every dialect can evaluate
+    (:func:`probegen.planning.well_posed.for_every_dialect`): the skeleton compiles
+    unchanged with any ``-d``."""
     from probegen.planning.revolved_spec import CLEARANCE_ABOVE_MODEL, all_revolved
+    from probegen.planning.well_posed import for_every_dialect
 
     clearance = max(machine.clearance_z, part.bbox_max[2] + CLEARANCE_ABOVE_MODEL)
-    revolved, notes = all_revolved(part, machine, clearance)
+    revolved, notes = all_revolved(part, for_every_dialect(machine), clearance)
     entries = [_revolved_entry(part, f) for f in revolved]
     left = list(notes)
     for face in part.faces:
