@@ -1,8 +1,9 @@
 """Planning keeps a bounded memory (issue 17: NIST CTC 2 went past 20 GB): the collision
-height maps, one per obstacle and so one per turned part (``Part.turned``: every head
-index, tilt and setup), are kept for the most recently used
-:data:`probegen.planning.heightmap.MAPS_KEPT` obstacles only, and the programs are the same
-bytes whatever the bound (a map dropped is built again from the same mesh).
+height maps and the FCL trees, one per obstacle and so one per turned part
+(``Part.turned``: every head index, tilt and setup), are kept for the most recently used
+:data:`probegen.planning.heightmap.MAPS_KEPT` and
+:data:`probegen.planning.collision.GEOMETRY_KEPT` obstacles only, and the programs are the
+same bytes whatever the bounds (a map or tree dropped is built again from the same mesh).
 
 Part: ``samples/parts/five_face_block.step`` with the CMM sample profile (holes on five
 faces: the part turned to several head indexes, and its FLIPPED setup).
@@ -20,7 +21,7 @@ from probegen import cad
 from probegen.cli.plan import program_text
 from probegen.dialects import get_dialect
 from probegen.machine.profile import load_profile
-from probegen.planning import heightmap
+from probegen.planning import collision, heightmap
 from probegen.planning.setups import all_revolved_setups, plan_setups
 
 BLOCK = REPO / "samples/parts/five_face_block.step"
@@ -29,10 +30,22 @@ CMM = REPO / "samples/machines/cmm.toml"
 
 def plan_texts(monkeypatch: pytest.MonkeyPatch, kept: int) -> tuple[list[str], int, int]:
     """The DMIS programs of ``plan BLOCK --all-revolved --machine CMM`` (one per setup)
-    planned with ``kept`` height maps kept on a fresh load; with the number of maps built
-    and the most kept at once."""
+    planned with ``kept`` height maps and FCL trees kept on a fresh load; with the number
+    of maps built and the most maps kept at once.  Checks that no more than ``kept`` trees
+    are kept at any time."""
     monkeypatch.setattr(heightmap, "MAPS_KEPT", kept)
     monkeypatch.setattr(heightmap, "_MAPS", type(heightmap._MAPS)())
+    monkeypatch.setattr(collision, "GEOMETRY_KEPT", kept)
+    monkeypatch.setattr(collision, "_GEOMETRY", type(collision._GEOMETRY)())
+    trees: list[Any] = []
+    build = collision.MeshObstacle._build
+
+    def counting_trees(self: collision.MeshObstacle) -> tuple[Any, Any]:
+        assert len(collision._GEOMETRY) <= kept
+        trees.append(self)
+        return build(self)
+
+    monkeypatch.setattr(collision.MeshObstacle, "_build", counting_trees)
     built: list[Any] = []
     most = [0]
     init = heightmap.HeightMap.__init__
@@ -58,6 +71,8 @@ def plan_texts(monkeypatch: pytest.MonkeyPatch, kept: int) -> tuple[list[str], i
     setups = plan_setups(spec, runtime_variables=get_dialect("dmis").RUNTIME_VARIABLES,
                          part=part)
     texts = [program_text("dmis", planned, notes) for _setup, planned in setups]
+    assert len(collision._GEOMETRY) <= kept
+    assert len(trees) > min(kept, 3)  # trees of more obstacles than kept, or built again
     return texts, len(built), most[0]
 
 

@@ -31,9 +31,10 @@ gives the geometry without a model.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections import OrderedDict
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -131,8 +132,42 @@ class SphereObstacle:
         return f"sphere {k + 1}"
 
 
+K = TypeVar("K", bound=Hashable)
+V = TypeVar("V")
+
+
+def most_recent(kept: OrderedDict[K, V], bound: int, key: K, build: Callable[[], V]) -> V:
+    """The value of ``key`` in ``kept``, built by ``build()`` when it is not there, kept
+    among the ``bound`` most recently used (the least recently used dropped).  For values
+    that are a function of ``key`` alone: one dropped is built again, the same."""
+    hit = kept.pop(key, None)
+    if hit is None:
+        hit = build()
+    kept[key] = hit
+    while len(kept) > bound:
+        kept.popitem(last=False)
+    return hit
+
+
+GEOMETRY_KEPT = 4
+"""Mesh obstacles whose collision geometry is kept (the most recently used ones): the FCL
+tree of the mesh (some 140 MB for NIST CTC 2's 248,000 triangles) and the ray tree of
+its inside test (some 50 MB).  A part planned in many frames (``Part.turned``: every
+head index, tilt or setup) has an obstacle per frame, kept for the part's life with the
+distances already swept; kept with their trees they went past 20 GB on CTC 2.  A tree
+dropped is built again from the same mesh when its obstacle is asked again: the same
+distances."""
+_GEOMETRY: OrderedDict[MeshObstacle, tuple[Any, Any]] = OrderedDict()
+"""The kept geometry by obstacle (FCL object, mesh of the inside test), least recently
+used first."""
+
+
 class MeshObstacle:
-    """A tessellated part; ``face_ids`` maps triangles to model face ids when known."""
+    """A tessellated part; ``face_ids`` maps triangles to model face ids when known.
+
+    Its queries run on an FCL tree of the mesh built on first use and kept among
+    :data:`GEOMETRY_KEPT` obstacles' (:attr:`part`); what it found (the sweeps, the
+    inside tests) is kept with the obstacle."""
 
     def __init__(self, mesh: Any, face_ids: np.ndarray | None) -> None:
         import fcl
@@ -140,12 +175,6 @@ class MeshObstacle:
         self.fcl = fcl
         self.mesh = mesh
         self.face_ids = face_ids
-        bvh = fcl.BVHModel()
-        bvh.beginModel(len(mesh.vertices), len(mesh.faces))
-        bvh.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
-                        np.asarray(mesh.faces, dtype=np.int32))
-        bvh.endModel()
-        self.part = fcl.CollisionObject(bvh, fcl.Transform())
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
         self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
@@ -155,6 +184,29 @@ class MeshObstacle:
         self._inside: dict[tuple[float, float, float], bool] = {}
         self.floor = -MESH_TOLERANCE
         """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
+
+    @property
+    def part(self) -> Any:
+        """The mesh as an FCL collision object (its bounding-volume tree)."""
+        return self._geometry()[0]
+
+    def _geometry(self) -> tuple[Any, Any]:
+        """The FCL object of the mesh and a mesh of its own for the inside test (whose
+        ray tree trimesh keeps on it), built on first use, kept among
+        :data:`GEOMETRY_KEPT` obstacles'."""
+        return most_recent(_GEOMETRY, GEOMETRY_KEPT, self, self._build)
+
+    def _build(self) -> tuple[Any, Any]:
+        import trimesh
+
+        fcl, mesh = self.fcl, self.mesh
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        bvh = fcl.BVHModel()
+        bvh.beginModel(len(mesh.vertices), len(mesh.faces))
+        bvh.addSubModel(vertices, np.asarray(mesh.faces, dtype=np.int32))
+        bvh.endModel()
+        return (fcl.CollisionObject(bvh, fcl.Transform()),
+                trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False))
 
     def _stylus(self, stylus: Stylus) -> tuple[Any, list[tuple[Any, float]]]:
         """The fcl objects of ``stylus``: its ball, and its shank and body each with the
@@ -232,7 +284,7 @@ class MeshObstacle:
         key = (float(point[0]), float(point[1]), float(point[2]))
         hit = self._inside.get(key)
         if hit is None:
-            hit = self._inside[key] = bool(self.mesh.contains(point[None])[0])
+            hit = self._inside[key] = bool(self._geometry()[1].contains(point[None])[0])
         return hit
 
     def shank_face(self, centre: np.ndarray, stylus: Stylus) -> tuple[str, str]:

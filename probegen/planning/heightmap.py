@@ -57,6 +57,7 @@ from probegen.planning.collision import (
     MeshObstacle,
     Obstacle,
     Stylus,
+    most_recent,
     probe_stylus,
     touch_check_stop,
 )
@@ -196,15 +197,9 @@ _MAPS: OrderedDict[MeshObstacle, HeightMap] = OrderedDict()
 def height_map(obstacle: MeshObstacle) -> HeightMap:
     """The obstacle's height map: built on first use, kept among the
     :data:`MAPS_KEPT` most recently used."""
-    hit = _MAPS.pop(obstacle, None)
-    if hit is None:
-        mesh = obstacle.mesh
-        hit = HeightMap(np.asarray(mesh.vertices, dtype=np.float64),
-                        np.asarray(mesh.faces, dtype=np.int64))
-    _MAPS[obstacle] = hit
-    while len(_MAPS) > MAPS_KEPT:
-        _MAPS.popitem(last=False)
-    return hit
+    mesh = obstacle.mesh
+    return most_recent(_MAPS, MAPS_KEPT, obstacle, lambda: HeightMap(
+        np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)))
 
 
 def path_segments(nodes: Sequence[ir.Node], r: float, clear: float) -> list[Segment] | None:
