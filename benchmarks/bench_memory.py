@@ -13,8 +13,8 @@ same functions as ``benchmarks/bench_real_parts.py``: ``all_revolved_setups``,
 * *max RSS*: the child's peak resident memory (``wait4``'s ``ru_maxrss``), MB;
 * *turned parts*: the turned parts alive at the end (``Part.turned`` frames kept on the
   part and on each setup's part);
-* *height maps*: the collision height maps alive at the end and their size with their
-  dilations (``planning.heightmap``), MB;
+* *height maps*: the collision height maps kept at the end and their size with their
+  dilations (``planning.heightmap``, kept by ``Part.recent``), MB;
 * the planned features, the plan time (wall clock) and the SHA-256 of the programs'
   text (its first 12 digits): two runs whose digests agree wrote the same bytes.
 
@@ -52,7 +52,6 @@ def child(model: str, key: str) -> dict[str, Any]:
     from probegen.cli.plan import program_text
     from probegen.dialects import get_dialect
     from probegen.machine.profile import load_profile
-    from probegen.planning import heightmap
     from probegen.planning.setups import all_revolved_setups, plan_setups
 
     probegen.cli.progress.ENABLED = False
@@ -68,10 +67,12 @@ def child(model: str, key: str) -> dict[str, Any]:
     digest = hashlib.sha256()
     for _setup, planned in setups:
         digest.update(program_text(dialect, planned, notes).encode("utf-8"))
-    maps = list(heightmap._MAPS.values())
+    parts = turned_parts(part)
+    maps = [m for p in (part, *parts) if ("recent", "height map") in p._memo
+            for m in p.recent("height map").values()]
     return {"planned": sum(len(p.revolved) for _s, p in setups),
             "plan_s": round(plan_s, 1),
-            "turned_alive": len(turned_parts(part)),
+            "turned_alive": len(parts),
             "maps_alive": len(maps),
             "maps_mb": round(sum(map_bytes(m) for m in maps) / 1e6, 1),
             "sha256": digest.hexdigest()[:12]}

@@ -31,10 +31,9 @@ gives the geometry without a model.
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -54,7 +53,7 @@ from probegen.planning.orient import (
 )
 
 if TYPE_CHECKING:
-    from probegen.cad import Part
+    from probegen.cad import Part, Recent
 
 MIN_STEP = 0.01
 """Smallest sphere-tracing step, mm; a segment closer than this to the limit is stepped
@@ -132,49 +131,30 @@ class SphereObstacle:
         return f"sphere {k + 1}"
 
 
-K = TypeVar("K", bound=Hashable)
-V = TypeVar("V")
-
-
-def most_recent(kept: OrderedDict[K, V], bound: int, key: K, build: Callable[[], V]) -> V:
-    """The value of ``key`` in ``kept``, built by ``build()`` when it is not there, kept
-    among the ``bound`` most recently used (the least recently used dropped).  For values
-    that are a function of ``key`` alone: one dropped is built again, the same."""
-    hit = kept.pop(key, None)
-    if hit is None:
-        hit = build()
-    kept[key] = hit
-    while len(kept) > bound:
-        kept.popitem(last=False)
-    return hit
-
-
-GEOMETRY_KEPT = 4
-"""Mesh obstacles whose collision geometry is kept (the most recently used ones): the FCL
-tree of the mesh (some 140 MB for NIST CTC 2's 248,000 triangles) and the ray tree of
-its inside test (some 50 MB).  A part planned in many frames (``Part.turned``: every
-head index, tilt or setup) has an obstacle per frame, kept for the part's life with the
-distances already swept; kept with their trees they went past 20 GB on CTC 2.  A tree
-dropped is built again from the same mesh when its obstacle is asked again: the same
-distances."""
-_GEOMETRY: OrderedDict[MeshObstacle, tuple[Any, Any]] = OrderedDict()
-"""The kept geometry by obstacle (FCL object, mesh of the inside test), least recently
-used first."""
-
-
 class MeshObstacle:
     """A tessellated part; ``face_ids`` maps triangles to model face ids when known.
 
-    Its queries run on an FCL tree of the mesh built on first use and kept among
-    :data:`GEOMETRY_KEPT` obstacles' (:attr:`part`); what it found (the sweeps, the
-    inside tests) is kept with the obstacle."""
+    Its queries run on an FCL tree of the mesh (:attr:`part`) built on first use; with
+    ``part`` (the part the mesh is of), the tree and the other large values derived from
+    the mesh (its height map) are kept among the part's most recently used ones
+    (:meth:`probegen.cad.Part.recent`: the part turned into many frames has an obstacle
+    per frame), else with the obstacle.  What the obstacle found (the sweeps, the inside
+    tests) is kept with it whatever is dropped."""
 
-    def __init__(self, mesh: Any, face_ids: np.ndarray | None) -> None:
+    def __init__(self, mesh: Any, face_ids: np.ndarray | None,
+                 part: Part | None = None) -> None:
         import fcl
+
+        from probegen.cad import Recent
 
         self.fcl = fcl
         self.mesh = mesh
         self.face_ids = face_ids
+        own: dict[str, Recent] = {}
+        self.recent: Callable[[str], Recent] = (
+            part.recent if part is not None else lambda kind: own.setdefault(kind, Recent()))
+        """The kept values of a kind (:meth:`probegen.cad.Part.recent`), keyed by
+        obstacle."""
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
         self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
@@ -192,9 +172,9 @@ class MeshObstacle:
 
     def _geometry(self) -> tuple[Any, Any]:
         """The FCL object of the mesh and a mesh of its own for the inside test (whose
-        ray tree trimesh keeps on it), built on first use, kept among
-        :data:`GEOMETRY_KEPT` obstacles'."""
-        return most_recent(_GEOMETRY, GEOMETRY_KEPT, self, self._build)
+        ray tree trimesh keeps on it), built on first use, kept as :attr:`recent`
+        says."""
+        return self.recent("collision tree").get(self, self._build)
 
     def _build(self) -> tuple[Any, Any]:
         import trimesh
@@ -350,7 +330,7 @@ def mesh_obstacle(part: Part, offset: Sequence[float] | None = None) -> MeshObst
     if offset is not None:
         mesh = mesh.copy()
         mesh.apply_translation(offset)
-    return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+    return MeshObstacle(mesh, mesh.metadata.get("face_ids"), part)
 
 
 @dataclass(frozen=True, slots=True)

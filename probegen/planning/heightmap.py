@@ -42,7 +42,6 @@ sample whose fcl distance is at least ``clear + MESH_TOLERANCE + MIN_STEP/2``, a
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Sequence
 from typing import Any
 
@@ -57,7 +56,6 @@ from probegen.planning.collision import (
     MeshObstacle,
     Obstacle,
     Stylus,
-    most_recent,
     probe_stylus,
     touch_check_stop,
 )
@@ -183,22 +181,11 @@ class HeightMap:
         return out
 
 
-MAPS_KEPT = 4
-"""Height maps kept (the most recently used ones).  A map and its dilations take up to
-some 200 MB (:data:`MAX_CELLS` cells of 8 bytes, one grid per dilation radius), and a
-part planned in many frames (``Part.turned``: every head index or tilt, every setup) has
-an obstacle per frame: kept for the part's life they went past 20 GB on NIST CTC 2.  A
-map dropped is built again when its obstacle needs it: the same grid from the same mesh,
-so the plans do not change."""
-_MAPS: OrderedDict[MeshObstacle, HeightMap] = OrderedDict()
-"""The kept height maps by obstacle, the least recently used first."""
-
-
 def height_map(obstacle: MeshObstacle) -> HeightMap:
-    """The obstacle's height map: built on first use, kept among the
-    :data:`MAPS_KEPT` most recently used."""
+    """The obstacle's height map: built on first use, kept among the part's most
+    recently used ones (:attr:`MeshObstacle.recent`; up to 300 MB with its dilations)."""
     mesh = obstacle.mesh
-    return most_recent(_MAPS, MAPS_KEPT, obstacle, lambda: HeightMap(
+    return obstacle.recent("height map").get(obstacle, lambda: HeightMap(
         np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)))
 
 
