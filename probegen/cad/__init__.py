@@ -25,7 +25,7 @@ from probegen.cad.faces import (
 )
 from probegen.cad.loading import STEP_HEADER, STEP_TERMINATOR, load_step
 from probegen.cad.mesh import tessellate
-from probegen.cad.part import Part, load_part
+from probegen.cad.part import Part, Recent, load_part
 
 __all__ = [
     "DEFAULT_PICK_DISTANCE",
@@ -35,6 +35,7 @@ __all__ = [
     "FaceRecord",
     "Model",
     "Part",
+    "Recent",
     "Vec3",
     "face_at",
     "face_by_id",

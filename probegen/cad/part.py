@@ -13,6 +13,7 @@ lives and dies with the part.
 from __future__ import annotations
 
 import os
+from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -39,6 +40,41 @@ work coordinates."""
 TURN_KEY_DECIMALS = 9
 """A turned part is kept per rotation rounded to this many decimals (two rotations that
 agree to 1e-9 are one frame)."""
+RECENT_KEPT = 4
+"""How many values of one kind :meth:`Part.recent` keeps: the most recently used."""
+
+
+class Recent:
+    """Large values of one kind derived from a part, the :data:`RECENT_KEPT` most recently
+    used kept, the others dropped (a value asked for again is built again: the same value,
+    for values that are a function of their key alone).
+
+    For what a part builds once per frame and cannot keep for every frame: planning turns
+    the part into a frame per head index, tilt, setup and off-grid feature axis
+    (:meth:`Part.turned`), and the collision geometry of each frame (the FCL tree of its
+    mesh, some 140 MB on NIST CTC 2, the ray tree of its inside test, its height maps,
+    up to 300 MB) kept for every frame went past 20 GB on CTC 2."""
+
+    def __init__(self) -> None:
+        self._values: OrderedDict[Hashable, Any] = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def values(self) -> list[Any]:
+        """The values kept, the least recently used first."""
+        return list(self._values.values())
+
+    def get(self, key: Hashable, build: Callable[[], T]) -> T:
+        """The value kept under ``key``, built by ``build()`` when it is not kept; then
+        the least recently used dropped until :data:`RECENT_KEPT` are left."""
+        hit = self._values.pop(key, None)
+        if hit is None:
+            hit = build()
+        self._values[key] = hit
+        while len(self._values) > RECENT_KEPT:
+            self._values.popitem(last=False)
+        return cast(T, hit)
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,6 +160,12 @@ class Part:
                                for row in rotation for x in row))
         return base.memo(key, lambda: Part(_turned_model(base.model, rotation),
                                            _turn=(base, rotation)))
+
+    def recent(self, kind: str) -> Recent:
+        """The :class:`Recent` values of ``kind`` of the part as loaded and of all its
+        turned parts together (kept on the original): at most :data:`RECENT_KEPT` of
+        them alive whatever the number of frames."""
+        return self.original.memo(("recent", kind), Recent)
 
     def memo(self, key: Hashable, build: Callable[[], T]) -> T:
         """The value kept under ``key``, built by ``build()`` the first time.

@@ -53,7 +53,7 @@ from probegen.planning.orient import (
 )
 
 if TYPE_CHECKING:
-    from probegen.cad import Part
+    from probegen.cad import Part, Recent
 
 MIN_STEP = 0.01
 """Smallest sphere-tracing step, mm; a segment closer than this to the limit is stepped
@@ -132,20 +132,29 @@ class SphereObstacle:
 
 
 class MeshObstacle:
-    """A tessellated part; ``face_ids`` maps triangles to model face ids when known."""
+    """A tessellated part; ``face_ids`` maps triangles to model face ids when known.
 
-    def __init__(self, mesh: Any, face_ids: np.ndarray | None) -> None:
+    Its queries run on an FCL tree of the mesh (:attr:`part`) built on first use; with
+    ``part`` (the part the mesh is of), the tree and the other large values derived from
+    the mesh (its height map) are kept among the part's most recently used ones
+    (:meth:`probegen.cad.Part.recent`: the part turned into many frames has an obstacle
+    per frame), else with the obstacle.  What the obstacle found (the sweeps, the inside
+    tests) is kept with it whatever is dropped."""
+
+    def __init__(self, mesh: Any, face_ids: np.ndarray | None,
+                 part: Part | None = None) -> None:
         import fcl
+
+        from probegen.cad import Recent
 
         self.fcl = fcl
         self.mesh = mesh
         self.face_ids = face_ids
-        bvh = fcl.BVHModel()
-        bvh.beginModel(len(mesh.vertices), len(mesh.faces))
-        bvh.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
-                        np.asarray(mesh.faces, dtype=np.int32))
-        bvh.endModel()
-        self.part = fcl.CollisionObject(bvh, fcl.Transform())
+        own: dict[str, Recent] = {}
+        self.recent: Callable[[str], Recent] = (
+            part.recent if part is not None else lambda kind: own.setdefault(kind, Recent()))
+        """The kept values of a kind (:meth:`probegen.cad.Part.recent`), keyed by
+        obstacle."""
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
         self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
@@ -155,6 +164,29 @@ class MeshObstacle:
         self._inside: dict[tuple[float, float, float], bool] = {}
         self.floor = -MESH_TOLERANCE
         """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
+
+    @property
+    def part(self) -> Any:
+        """The mesh as an FCL collision object (its bounding-volume tree)."""
+        return self._geometry()[0]
+
+    def _geometry(self) -> tuple[Any, Any]:
+        """The FCL object of the mesh and a mesh of its own for the inside test (whose
+        ray tree trimesh keeps on it), built on first use, kept as :attr:`recent`
+        says."""
+        return self.recent("collision tree").get(self, self._build)
+
+    def _build(self) -> tuple[Any, Any]:
+        import trimesh
+
+        fcl, mesh = self.fcl, self.mesh
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        bvh = fcl.BVHModel()
+        bvh.beginModel(len(mesh.vertices), len(mesh.faces))
+        bvh.addSubModel(vertices, np.asarray(mesh.faces, dtype=np.int32))
+        bvh.endModel()
+        return (fcl.CollisionObject(bvh, fcl.Transform()),
+                trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False))
 
     def _stylus(self, stylus: Stylus) -> tuple[Any, list[tuple[Any, float]]]:
         """The fcl objects of ``stylus``: its ball, and its shank and body each with the
@@ -232,7 +264,7 @@ class MeshObstacle:
         key = (float(point[0]), float(point[1]), float(point[2]))
         hit = self._inside.get(key)
         if hit is None:
-            hit = self._inside[key] = bool(self.mesh.contains(point[None])[0])
+            hit = self._inside[key] = bool(self._geometry()[1].contains(point[None])[0])
         return hit
 
     def shank_face(self, centre: np.ndarray, stylus: Stylus) -> tuple[str, str]:
@@ -298,7 +330,7 @@ def mesh_obstacle(part: Part, offset: Sequence[float] | None = None) -> MeshObst
     if offset is not None:
         mesh = mesh.copy()
         mesh.apply_translation(offset)
-    return MeshObstacle(mesh, mesh.metadata.get("face_ids"))
+    return MeshObstacle(mesh, mesh.metadata.get("face_ids"), part)
 
 
 @dataclass(frozen=True, slots=True)

@@ -42,7 +42,6 @@ sample whose fcl distance is at least ``clear + MESH_TOLERANCE + MIN_STEP/2``, a
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Sequence
 from typing import Any
 
@@ -147,18 +146,19 @@ class HeightMap:
         k = int(np.ceil(radius / self.cell)) + 2
         pad = np.pad(self.height, k, constant_values=-np.inf)
         out = np.full_like(pad, -np.inf)
-        runs: dict[int, np.ndarray] = {}
-        for a in range(-k, k + 1):
+        run, width = pad, -1
+        for a in range(k + 1):
             # cells (a, b) apart hold points at least h·(|a| - 1) apart along x (and y):
             # one more cell of slack on each axis for rounding
-            da = max(abs(a) - 2, 0) * self.cell
+            da = max(a - 2, 0) * self.cell
             if da > radius:
-                continue
+                break
             w = int(np.floor(np.sqrt(radius**2 - da**2) / self.cell)) + 2
-            if w not in runs:
-                runs[w] = maximum_filter1d(pad, 2 * w + 1, axis=1, mode="constant",
-                                           cval=-np.inf)
-            out = np.maximum(out, np.roll(runs[w], a, axis=0))
+            if w != width:  # w falls with |a|: one run of the filter in memory at a time
+                run, width = maximum_filter1d(pad, 2 * w + 1, axis=1, mode="constant",
+                                              cval=-np.inf), w
+            for shift in dict.fromkeys((a, -a)):
+                np.maximum(out, np.roll(run, shift, axis=0), out=out)
         self._dilated[radius] = (out, k)
         return out, k
 
@@ -181,17 +181,12 @@ class HeightMap:
         return out
 
 
-_MAPS: weakref.WeakKeyDictionary[MeshObstacle, HeightMap] = weakref.WeakKeyDictionary()
-
-
 def height_map(obstacle: MeshObstacle) -> HeightMap:
-    """The obstacle's height map (built once per mesh)."""
-    hit = _MAPS.get(obstacle)
-    if hit is None:
-        mesh = obstacle.mesh
-        hit = _MAPS[obstacle] = HeightMap(np.asarray(mesh.vertices, dtype=np.float64),
-                                          np.asarray(mesh.faces, dtype=np.int64))
-    return hit
+    """The obstacle's height map: built on first use, kept among the part's most
+    recently used ones (:attr:`MeshObstacle.recent`; up to 300 MB with its dilations)."""
+    mesh = obstacle.mesh
+    return obstacle.recent("height map").get(obstacle, lambda: HeightMap(
+        np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)))
 
 
 def path_segments(nodes: Sequence[ir.Node], r: float, clear: float) -> list[Segment] | None:
