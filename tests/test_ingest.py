@@ -204,7 +204,7 @@ def test_run_identity_from_the_log_the_spec_and_the_options(tmp_path: Path) -> N
     assert run is not None
     assert (run.serial, run.time, run.part_number, run.part_name, run.program) == (
         "4711", "2025-11-26T13:48:53+00:00", "4711-020-A", "Sphere artefact",
-        "O1001 H94448874")
+        "O1001 H2DAFDB55")
     assert run.machine == spec.machine.name and run.operator is None
     given = IdentityOptions(serial=" S9 ", part_number="P-1", operator="B. Jones",
                             time="2026-01-02T03:04:05.678-05:00", batch="7")

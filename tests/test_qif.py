@@ -121,7 +121,7 @@ def test_the_run_identity_is_in_the_qif_places(schema: Path, sphere: Ingest) -> 
     assert trace.findtext("q:InspectionStart", namespaces=NS) == "2026-11-26T12:48:53Z"
     assert trace.findtext("q:InspectionOperator/q:Name", namespaces=NS) == "A. Smith"
     labels = {a.get("name"): a.get("value") for a in results.findall("q:Attributes/*", NS)}
-    assert labels["program"] == "O1001 H94448874"
+    assert labels["program"] == "O1001 H2DAFDB55"
     assert labels["machine"] == spec.machine.name
     component = root.find(".//q:ActualComponentSets/q:ActualComponentSet/q:ActualComponent",
                           NS)
