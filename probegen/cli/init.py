@@ -54,6 +54,14 @@ def _relative(path: str, folder: Path) -> str:
     return Path(os.path.relpath(Path(path).resolve(), folder.resolve())).as_posix()
 
 
+def spec_head(model: str, profile: str, folder: Path) -> list[str]:
+    """The ``[part]`` table and the start of ``[machine]`` (its ``profile``) of a spec
+    written into ``folder``: ``model`` and ``profile`` as given on the command line,
+    written relative to it.  ``init``'s skeleton and ``plan --all-revolved -o``'s spec."""
+    return ["[part]", f"model = {toml_string(_relative(model, folder))}", 'units = "mm"',
+            "", "[machine]", f"profile = {toml_string(_relative(profile, folder))}"]
+
+
 def program_name(stem: str) -> str:
     """A program name the spec accepts (1-24 of ``A-Z 0-9 blank . _ -``) from a file stem."""
     name = re.sub(r"[^A-Z0-9 ._-]", "_", stem.upper())[:24].strip()
@@ -74,18 +82,13 @@ def skeleton_text(found: Any, machine: Any, target: Path, model: str, profile: s
         "# out are listed at the end with the reason (docs/init.md).",
         f"# {len(found.features)} features ({_counts(found)}), {len(found.left_out)} left out.",
         "",
-        "[part]",
-        f"model = {_string(_relative(model, folder))}",
-        'units = "mm"',
-        "",
-        "[machine]",
-        f"profile = {_string(_relative(profile, folder))}",
+        *spec_head(model, profile, folder),
         f"clearance_z = {found.clearance_z:.3f}   # at least 10 mm above the model "
         f"(the profile's: {machine.clearance_z:.3f})",
         "",
         "[program]",
         "number = 1001",
-        f"name = {_string(program_name(Path(model).stem))}",
+        f"name = {toml_string(program_name(Path(model).stem))}",
     ]
     for entry in found.features:
         lines += ["", f"# {entry.feature.id}: {entry.title} ({entry.source})", "[[feature]]",
@@ -99,8 +102,8 @@ def skeleton_text(found: Any, machine: Any, target: Path, model: str, profile: s
 
 def _keys(feature: Any) -> list[str]:
     """The TOML keys of one skeleton feature (revolved, plane or free-form)."""
-    out = [f"id = {_string(feature.id)}",
-           f"kind = {_string(getattr(feature, 'kind', 'freeform'))}",
+    out = [f"id = {toml_string(feature.id)}",
+           f"kind = {toml_string(getattr(feature, 'kind', 'freeform'))}",
            f"face = {feature.face}"]
     if hasattr(feature, "contacts"):
         points = ", ".join(f"[{_num(p[0])}, {_num(p[1])}, {_num(p[2])}]"
@@ -108,7 +111,7 @@ def _keys(feature: Any) -> list[str]:
         out.append(f"contacts = [{points}]")
     if hasattr(feature, "grid"):
         d = feature.direction
-        out += [f"grid = {_string(feature.grid)}",
+        out += [f"grid = {toml_string(feature.grid)}",
                 f"points = [{feature.counts[0]}, {feature.counts[1]}]",
                 f"margin = {_num(feature.margin)}",
                 f"direction = [{d[0]:.6f}, {d[1]:.6f}, {d[2]:.6f}]".replace("-0.000000",
@@ -121,7 +124,7 @@ def _num(value: float) -> str:
     return "0.0000" if text == "-0.0000" else text
 
 
-def _string(text: str) -> str:
+def toml_string(text: str) -> str:
     """A TOML basic string."""
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 

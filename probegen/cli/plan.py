@@ -397,7 +397,7 @@ def all_revolved_spec_text(spec: Any, target: Path, model: str, profile: str) ->
     program's number, name and clearance plane, every feature with its kind, face and
     points, and the setup of those a ``[[setup]]`` measures; ``ingest --spec`` of it plans
     the same programs again (edited, it plans others: their logs no longer match)."""
-    from probegen.cli.init import _relative, _string
+    from probegen.cli.init import spec_head, toml_string
     from probegen.planning.setups import AS_LOADED
 
     folder = target.parent
@@ -409,23 +409,18 @@ def all_revolved_spec_text(spec: Any, target: Path, model: str, profile: str) ->
         "# logs or DMIS outputs (one per setup program). Tolerances may be added; any other",
         "# change plans other programs, whose logs these are not.",
         "",
-        "[part]",
-        f"model = {_string(_relative(model, folder))}",
-        'units = "mm"',
-        "",
-        "[machine]",
-        f"profile = {_string(_relative(profile, folder))}",
+        *spec_head(model, profile, folder),
         f"clearance_z = {spec.clearance_z!r}",
         "",
         "[program]",
         f"number = {spec.program_number}",
-        f"name = {_string(spec.program_name)}",
+        f"name = {toml_string(spec.program_name)}",
     ]
     for f in spec.features:
-        lines += ["", "[[feature]]", f"id = {_string(f.id)}", f"kind = {_string(f.kind)}",
-                  f"face = {f.face}", f"points = {f.points}"]
+        lines += ["", "[[feature]]", f"id = {toml_string(f.id)}",
+                  f"kind = {toml_string(f.kind)}", f"face = {f.face}", f"points = {f.points}"]
         if f.setup is not None and f.setup != AS_LOADED:
-            lines.append(f"setup = {_string(f.setup)}")
+            lines.append(f"setup = {toml_string(f.setup)}")
     return "\n".join(lines) + "\n"
 
 
