@@ -11,6 +11,7 @@ skeleton ``init`` writes.
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -135,7 +136,9 @@ def test_a_rack_leaves_out_for_the_smallest_styluss_own_reason(shallow: Path) ->
     from probegen.planning.styli import stylus_named
     from probegen.spec.model import RevolvedSpec
 
-    machine, part = load_profile(FIVE), cad.load_part(shallow)
+    sample = load_profile(FIVE)   # its rack without D1: D2 the smallest, as described
+    machine = replace(sample, rack=tuple(s for s in sample.rack if s.label != "D1"))
+    part = cad.load_part(shallow)
     assert smallest_bore(machine.with_stylus(stylus_named(machine, "D2", "x"))) == 4.0
     spec, notes = all_revolved_spec(part, machine)
     assert spec.features == ()

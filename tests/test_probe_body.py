@@ -41,16 +41,22 @@ def deep(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def profile_with(tmp_path: Path, probe: str, source: str = "vmc-fanuc.toml") -> Path:
+    """The sample profile ``source`` with ``probe`` (TOML lines) in its ``[probe]`` table
+    instead of the body the sample states."""
     lines = (MACHINES / source).read_text(encoding="utf-8").splitlines(keepends=True)
     at = next(k for k, line in enumerate(lines) if line.startswith("[probe]"))
-    text = "".join([*lines[:at + 1], f"{probe}\n", *lines[at + 1:]])
+    end = next((k for k in range(at + 1, len(lines)) if lines[k].startswith("[")), len(lines))
+    table = [line for line in lines[at + 1:end] if not line.startswith("body_")]
+    text = "".join([*lines[:at + 1], f"{probe}\n", *table, *lines[end:]])
     path = tmp_path / "profile.toml"
     path.write_text(text, encoding="utf-8")
     return path
 
 
 def test_the_body_is_checked_where_the_profile_states_it(tmp_path: Path) -> None:
-    plain = load_profile(MACHINES / "vmc-fanuc.toml").probe
+    stated = load_profile(MACHINES / "vmc-fanuc.toml").probe   # the sample's OMP40-2-like
+    assert (stated.body_diameter, stated.body_length) == (40.0, 50.0)
+    plain = load_profile(profile_with(tmp_path, "")).probe
     assert (plain.body_diameter, plain.body_length) == (0.0, 0.0)  # none stated: none
     given = load_profile(profile_with(tmp_path, "body_diameter = 63.0\nbody_length = 80.0"))
     assert (given.probe.body_diameter, given.probe.body_length) == (63.0, 80.0)

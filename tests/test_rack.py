@@ -39,7 +39,7 @@ def edited(tmp: Path, source: Path, *pairs: tuple[str, str]) -> Path:
     return path
 
 
-def test_cmm_sample_has_a_rack_of_four_and_a_ph10_head() -> None:
+def test_cmm_sample_has_a_rack_of_five_and_a_ph10_head() -> None:
     m = load_profile(CMM)
     assert m.dialect == "dmis" and m.tilt is None
     # one setup: the part turned over about X (docs/setups.md), with its fixture note
@@ -48,23 +48,27 @@ def test_cmm_sample_has_a_rack_of_four_and_a_ph10_head() -> None:
                                    "align at the datum again"),)
     assert [(s.label, s.ball_diameter, s.shank_diameter, s.length, s.tool_number)
             for s in m.rack] == [("D1", 1.0, 0.7, 20.0, 0), ("D2", 2.0, 1.4, 30.0, 0),
-                                 ("D3", 3.0, 2.0, 40.0, 0), ("D6", 6.0, 4.5, 50.0, 0)]
+                                 ("D3", 3.0, 2.0, 40.0, 0), ("D6", 6.0, 4.5, 50.0, 0),
+                                 ("D3L", 3.0, 2.5, 100.0, 0)]
+    # the TP20-like probe body, on every stylus (docs/spec.md)
+    assert (m.probe.body_diameter, m.probe.body_length) == (13.2, 65.0)
     assert m.head == Head((0.0, 105.0), (-180.0, 180.0), 7.5, 14.0, 65.0)
     # the [probe] stylus is the rack's D3 (same ball, shank, length; no tool numbers)
     assert m.stylus.label == "D3"
-    assert [s.label for s in m.styli()] == ["D3", "D1", "D2", "D6"]
+    assert [s.label for s in m.styli()] == ["D3", "D1", "D2", "D6", "D3L"]
     # every index position of the head: 15 A positions, 49 B positions
     assert round((m.head.a[1] - m.head.a[0]) / m.head.step) + 1 == 15
     assert round((m.head.b[1] - m.head.b[0]) / m.head.step) + 1 == 49
 
 
-def test_five_axis_sample_has_a_tilt_and_three_tools() -> None:
+def test_five_axis_sample_has_a_tilt_and_five_tools() -> None:
     m = load_profile(FIVE)
     assert m.dialect == "fanuc" and m.head is None
     assert m.tilt == Tilt("G68.2", "A", "C", (-110.0, 110.0), (-360.0, 360.0))
     assert m.controller.has("G68.2") and m.controller.tool_change
     assert [(s.label, s.ball_diameter, s.tool_number) for s in m.styli()] == [
-        ("D6", 6.0, 20), ("D3", 3.0, 21), ("D2", 2.0, 22)]
+        ("D6", 6.0, 20), ("D3", 3.0, 21), ("D2", 2.0, 22), ("D6L", 6.0, 23), ("D1", 1.0, 24)]
+    assert (m.probe.body_diameter, m.probe.body_length) == (40.0, 50.0)   # OMP40-2-like
     assert m.stylus == m.rack[0] and m.probe.tool_number == 20
     assert [(s.name, s.rotation, s.origin) for s in m.setups] == [
         ("FLIPPED", frames.FLIP_X, (0.0, 0.0, 0.0))]
@@ -240,7 +244,7 @@ def test_spec_stylus_key(tmp_path: Path) -> None:
 
 def test_spec_stylus_key_names_the_labels(tmp_path: Path) -> None:
     with pytest.raises(SpecError, match=r"feature\[0\]\.stylus: expected a stylus of the "
-                                        r"machine's rack \(D6, D3, D2; .*found 'D22' "
+                                        r"machine's rack \(D6, D3, D2, D6L, D1; .*found 'D22' "
                                         r"\(did you mean 'D2'\?\)"):
         load_spec(spec_with(tmp_path, "D22"))
 

@@ -42,27 +42,27 @@ def test_the_largest_ball_that_fits_wins() -> None:
     tried: list[float] = []
     s, plan = pick_stylus(FIVE, bore(4.5, tried=tried))
     assert (s.label, plan) == ("D3", "plan T21 ball 3")
-    assert tried == [6.0, 3.0]
+    assert tried == [6.0, 6.0, 3.0]   # D6, then D6L (the same ball, longer), then D3
     s, plan = pick_stylus(FIVE, bore(20.0))
     assert (s.label, plan) == ("D6", "plan T20 ball 6")
 
 
 def test_the_cmm_rack_order_and_its_smallest() -> None:
-    assert [s.label for s in rack_order(CMM)] == ["D6", "D3", "D2", "D1"]
+    assert [s.label for s in rack_order(CMM)] == ["D6", "D3", "D3L", "D2", "D1"]
     assert smallest_stylus(CMM).label == "D1"
-    assert smallest_stylus(FIVE).label == "D2"
+    assert smallest_stylus(FIVE).label == "D1"
     assert smallest_stylus(VMC).label == "PRB20"
     s, _ = pick_stylus(CMM, bore(2.5))
     assert s.label == "D1"
 
 
 def test_equal_balls_shorter_first_longer_for_depth() -> None:
-    long3 = Stylus("L3", 3.0, 2.0, 80.0, 23)
+    long3 = Stylus("L3", 3.0, 2.0, 80.0, 25)
     machine = replace(FIVE, rack=(*FIVE.rack, long3))
-    assert [s.label for s in rack_order(machine)] == ["D6", "D3", "L3", "D2"]
-    assert smallest_stylus(machine).label == "D2"
+    assert [s.label for s in rack_order(machine)] == ["D6", "D6L", "D3", "L3", "D2", "D1"]
+    assert smallest_stylus(machine).label == "D1"
     s, plan = pick_stylus(machine, bore(5.0, depth=60.0))
-    assert (s.label, plan) == ("L3", "plan T23 ball 3")
+    assert (s.label, plan) == ("L3", "plan T25 ball 3")
     s, _ = pick_stylus(machine, bore(5.0, depth=30.0))
     assert s.label == "D3"
 
@@ -77,29 +77,31 @@ def test_force_plans_that_stylus_only() -> None:
 
 def test_a_forced_label_not_in_the_rack() -> None:
     with pytest.raises(SpecError, match=r"stylus: expected a stylus of the machine's rack "
-                                        r"\(D6, D3, D2; .*vmc-5axis-fanuc.toml: "
-                                        r"\[\[probe.stylus\]\]\), found 'D1'"):
-        pick_stylus(FIVE, bore(20.0), force="D1")
+                                        r"\(D6, D6L, D3, D2, D1; .*vmc-5axis-fanuc.toml: "
+                                        r"\[\[probe.stylus\]\]\), found 'D5'"):
+        pick_stylus(FIVE, bore(20.0), force="D5")
 
 
 def test_none_plans_raises_the_smallest_error_with_what_each_said() -> None:
     with pytest.raises(PlanningError) as info:
-        pick_stylus(FIVE, bore(2.5))
+        pick_stylus(FIVE, bore(1.5))
     text = str(info.value)
-    assert text.startswith("spec.toml: feature[0]: bore 2.5: expected a ball under 1.5 mm, "
-                           "found 2 (with D2, the smallest stylus; no stylus of the rack "
+    assert text.startswith("spec.toml: feature[0]: bore 1.5: expected a ball under 0.5 mm, "
+                           "found 1 (with D1, the smallest stylus; no stylus of the rack "
                            "plans it, largest first: ")
     # what all the messages share (the feature's "where") is said once, at the start
-    assert text.endswith("D6 (ball 6 mm): expected a ball under 1.5 mm, found 6; "
-                         "D3 (ball 3 mm): expected a ball under 1.5 mm, found 3; "
-                         "D2 (ball 2 mm): expected a ball under 1.5 mm, found 2)")
+    assert text.endswith("D6 (ball 6 mm): expected a ball under 0.5 mm, found 6; "
+                         "D6L (ball 6 mm): expected a ball under 0.5 mm, found 6; "
+                         "D3 (ball 3 mm): expected a ball under 0.5 mm, found 3; "
+                         "D2 (ball 2 mm): expected a ball under 0.5 mm, found 2; "
+                         "D1 (ball 1 mm): expected a ball under 0.5 mm, found 1)")
 
 
 def test_the_error_keeps_the_smallest_styluss_class() -> None:
-    with pytest.raises(CollisionError, match=r"the probe body hits the part at depth 30 of "
-                                             r"99 mm \(with D2, the smallest stylus; "
+    with pytest.raises(CollisionError, match=r"the probe body hits the part at depth 20 of "
+                                             r"120 mm \(with D1, the smallest stylus; "
                                              r"no stylus"):
-        pick_stylus(FIVE, bore(20.0, depth=99.0))
+        pick_stylus(FIVE, bore(20.0, depth=120.0))
 
 
 def test_one_stylus_error_unchanged() -> None:
