@@ -153,7 +153,13 @@ def test_fanuc_bore_block_size_taper_roundness(tmp_path: Path) -> None:
     assert bore["D_S1"] == pytest.approx(50.0 + 2 * a_top, abs=SIZE)
     assert bore["D_S2"] == pytest.approx(50.0 + 2 * a_bottom, abs=SIZE)
     assert bore["TAPER"] == pytest.approx(2 * (a_top - a_bottom), abs=SIZE)
-    assert bore["TAPER"] == pytest.approx(2 * 2e-4 * 30.0, abs=SIZE)  # as planted
+    # as planted: the bore's 10 mm section has 7 touches of 8 (the OMP40 body of
+    # vmc-fanuc.toml would meet the boss at the eighth), and the least-squares circle of 7
+    # points on a 3-lobed ring is not the ring's mean: off the planted taper by the
+    # sampling, within the stated uncertainty
+    taper = next(c for c in ing.revolved[0].characteristics if c.name == "TAPER")
+    assert taper.U is not None and 0.0 < taper.U < 0.02
+    assert bore["TAPER"] == pytest.approx(2 * 2e-4 * 30.0, abs=taper.U)
     assert bore["RON_S1"] == pytest.approx(ron_top, abs=RANGE)
     assert bore["RON_S2"] == pytest.approx(ron_bottom, abs=RANGE)
     # the 3 lobes (2 x 0.004 peak to valley) sampled at 8 points: least squares 0.0075,
@@ -202,7 +208,7 @@ def test_compact_form_measures_the_forms_as_inline(
         doc = json.loads(to_json(ingest(log, load_spec(spec_path))))
         assert doc.pop("source") == str(log)
         docs.append(doc)
-    assert touches[1] == touches[0] and len(touches[0]) >= 22
+    assert touches[1] == touches[0] and len(touches[0]) >= 21
     assert docs[1] == docs[0] and docs[0]["features"]
 
 

@@ -57,7 +57,9 @@ def test_fanuc_bore_block_recovers_planted_truth(in_repo: Path, tmp_path: Path,
     vm = VirtualMachine(PlacedPart.from_model(models[diameter], translation=OFFSET),
                         ProbeModel(3.0))
     res = run_text(text, vm, kind="macrob")
-    assert res.alarm is None and res.touches == 22
+    # 22 planned, less the bore's touch at 45 deg in its 10 mm section: the OMP40
+    # body of vmc-fanuc.toml would meet the boss there
+    assert res.alarm is None and res.touches == 21
     log = tmp_path / "run.log"
     log.write_text(res.output)
     ing = ingest(log, load_spec(SPEC))

@@ -176,9 +176,14 @@ def test_nist_ctc5_bspline_blends(tmp_path: Path, dialect: str) -> None:
     """Two R 6.35 concave B-spline blends of NIST CTC 5: only the guide points near the
     floor are reachable from above with a 6 mm ball (see docs/m3.md); the part placed
     0.02, -0.03, 0.05 mm off is seen as the exact normal deviations."""
+    # the 6 mm ball 100 mm from the OMP40 body (vmc-fanuc.toml's stylus is 50 mm long:
+    # its 40 mm body would meet the pocket's walls above the blends)
+    sample = (REPO / "samples/machines/vmc-fanuc.toml").read_text()
+    assert sample.count("\nlength = 50.0 ") == 1
+    profile = tmp_path / "vmc-fanuc-long.toml"
+    profile.write_text(sample.replace("\nlength = 50.0 ", "\nlength = 100.0 "))
     path = tmp_path / "ctc5.toml"
-    path.write_text(NIST_SPEC.format(model=NIST_CTC5,
-                                     profile=REPO / "samples/machines/vmc-fanuc.toml"))
+    path.write_text(NIST_SPEC.format(model=NIST_CTC5, profile=profile))
     spec = load_spec(path)
     model = cad.load_step(NIST_CTC5)
     d = get_dialect(dialect)
