@@ -110,7 +110,7 @@ def test_a_mismatched_dmis_output_is_refused(tmp_path: Path) -> None:
 
     part, spec, runs = _run_all(tmp_path, ODD, CMM, "dmis")
     flipped = runs[1][2]
-    with pytest.raises(ProbegenError, match="a second output of 'ALL REVOLVED FLIPPED'"):
+    with pytest.raises(ProbegenError, match="a second DMIS output of 'ALL REVOLVED FLIPPED'"):
         ingest_dmis_setups([flipped, flipped], spec, part=part)
     other = tmp_path / "other.dms"
     other.write_text("FILNAM/'SOMETHING ELSE'\nUNITS/MM, ANGDEC\nOUTPUT/FA(Q1)\n"
@@ -225,7 +225,7 @@ def test_ingest_of_both_dmis_outputs_on_the_command_line(
     capsys.readouterr()
     code = main(["-q", "ingest", outputs[0], outputs[0], "--spec", str(spec), "-o", str(res)])
     assert code != ExitCode.OK
-    assert "a second output of 'TWO BORES FLIPPED'" in capsys.readouterr().err
+    assert "a second DMIS output of 'TWO BORES FLIPPED'" in capsys.readouterr().err
     log = tmp_path / "run.log"
     log.write_text("%\nPGSTART O1001 V2 H00000000\nPGEND\n", encoding="ascii")
     code = main(["-q", "ingest", outputs[0], str(log), "--spec", str(spec), "-o", str(res)])

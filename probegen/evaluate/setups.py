@@ -17,9 +17,9 @@ A profile without setups: one log, exactly :func:`probegen.evaluate.ingest.inges
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from probegen.errors import ProbegenError
 from probegen.evaluate.characteristics import NotEvaluated
@@ -42,6 +42,31 @@ def log_program(path: str | Path) -> int | None:
     return log.program
 
 
+T = TypeVar("T")
+
+
+def pair_each(paths: Sequence[str | Path], items: Sequence[T],
+              programs: Sequence[SetupProgram], identify: Callable[[str | Path, T], int],
+              what: str, name: Callable[[SetupProgram], str]) -> dict[int, tuple[str | Path, T]]:
+    """Each returned file (``paths[i]``, read as ``items[i]``) paired with its program, by
+    its index in ``programs`` as ``identify`` finds it (which raises for a file of none of
+    them); ``what`` names the files ("log", "DMIS output") and ``name`` a program in the
+    message.
+
+    Raises:
+        ProbegenError: as ``identify``; two files of one program.
+    """
+    out: dict[int, tuple[str | Path, T]] = {}
+    for path, item in zip(paths, items, strict=True):
+        k = identify(path, item)
+        if k in out:
+            raise ProbegenError(f"{path}: expected one {what} per setup program, found a "
+                                f"second {what} of {name(programs[k])} (setup "
+                                f"{programs[k].name}; the first: {out[k][0]})")
+        out[k] = (path, item)
+    return out
+
+
 def pair_logs(logs: Sequence[str | Path], programs: Sequence[SetupProgram]
               ) -> dict[int, str | Path]:
     """Each log's program (by its index in ``programs``), by the number its ``PGSTART``
@@ -55,20 +80,18 @@ def pair_logs(logs: Sequence[str | Path], programs: Sequence[SetupProgram]
         return {0: logs[0]}
     numbers = {sp.spec.program_number: k for k, sp in enumerate(programs)}
     known = ", ".join(f"O{sp.spec.program_number:04d} (setup {sp.name})" for sp in programs)
-    out: dict[int, str | Path] = {}
-    for log in logs:
-        number = log_program(log)
+
+    def identify(log: str | Path, number: int | None) -> int:
         k = numbers.get(number) if number is not None else None
         if k is None:
             found = "no PGSTART line" if number is None else f"O{number:04d}"
             raise ProbegenError(f"{log}: expected the log of one of the spec's setup "
                                 f"programs {known}, found {found}")
-        if k in out:
-            raise ProbegenError(f"{log}: expected one log per setup program, found a second "
-                                f"log of O{number:04d} (setup {programs[k].name}; the first: "
-                                f"{out[k]})")
-        out[k] = log
-    return out
+        return k
+
+    paired = pair_each(logs, [log_program(log) for log in logs], programs, identify, "log",
+                       lambda sp: f"O{sp.spec.program_number:04d}")
+    return {k: path for k, (path, _) in paired.items()}
 
 
 def ingest_setups(logs: Sequence[str | Path], spec: Spec, *,

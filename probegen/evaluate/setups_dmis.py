@@ -47,7 +47,7 @@ from probegen.evaluate.ingest import (
     ingest_dmis_freeform,
 )
 from probegen.evaluate.revolved import RevolvedResult
-from probegen.evaluate.setups import _merged, _not_measured
+from probegen.evaluate.setups import _merged, _not_measured, pair_each
 from probegen.ir import frames
 from probegen.results import DmisOutput, DprntLog, read_dmis_output
 from probegen.results.dmis_records import FeatureActual
@@ -122,15 +122,9 @@ def pair_outputs(paths: Sequence[str | Path], outputs: Sequence[DmisOutput],
     Raises:
         ProbegenError: as :func:`output_program`; two outputs of one program.
     """
-    out: dict[int, tuple[str | Path, DmisOutput]] = {}
-    for path, output in zip(paths, outputs, strict=True):
-        k = output_program(path, output, programs)
-        if k in out:
-            raise ProbegenError(f"{path}: expected one DMIS output per setup program, found "
-                                f"a second output of '{programs[k].spec.program_name}' "
-                                f"(setup {programs[k].name}; the first: {out[k][0]})")
-        out[k] = (path, output)
-    return out
+    return pair_each(paths, outputs, programs,
+                     lambda path, output: output_program(path, output, programs),
+                     "DMIS output", lambda sp: f"'{sp.spec.program_name}'")
 
 
 def ingest_dmis_setups(paths: Sequence[str | Path], spec: Spec, *,
