@@ -233,6 +233,21 @@ def test_a_log_of_another_program_is_refused(folder: Path, compiled: Path) -> No
                  str(folder / "x")]) != ExitCode.OK
 
 
+def test_two_logs_of_one_program_are_refused(folder: Path, compiled: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    spec = str(folder / "spec.toml")
+    logs = []
+    for k in (1, 2):
+        log = folder / f"top_{k}.log"
+        assert main(["-q", "sim", str(compiled / "spec.nc"), "--spec", spec, "-o",
+                     str(log)]) == 0
+        logs.append(str(log))
+    code = main(["-q", "ingest", *logs, "--spec", spec, "-o", str(folder / "twice")])
+    assert code != ExitCode.OK
+    assert (f"{logs[1]}: expected one log per setup program, found a second log of O1001 "
+            f"(setup AS LOADED; the first: {logs[0]})") in capsys.readouterr().err
+
+
 def test_the_setup_of_sim_must_be_known(folder: Path, compiled: Path) -> None:
     assert main(["-q", "sim", str(compiled / "spec_FLIPPED.nc"), "--spec",
                  str(folder / "spec.toml"), "--setup", "SIDE"]) == ExitCode.SPEC
