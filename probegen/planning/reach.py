@@ -24,24 +24,32 @@ REACH_SECTIONS = {"circle": (0.5,), "cylinder": (0.1, 0.9), "cone": (0.1, 0.9),
 """Sections (fractions of the reached part of the feature, from its deepest point up)."""
 
 
-def reach_fractions(feature: Any, machine: MachineProfile,
-                    kind: str) -> tuple[float, ...] | None:
+def reach_fractions(feature: Any, machine: MachineProfile, kind: str,
+                    top: float | None = None) -> tuple[tuple[float, ...], ...]:
     """Sections of ``feature`` (fractions of its extent, low to high, as
     ``revolved_plan`` takes them) spread over the depth the stylus of ``machine`` reaches
-    below the feature's upper end (frame Z) with the body above that end by the margin:
-    the stylus's length less the margin; None without a probe body, or when the stylus
-    reaches the whole feature (the other sections serve)."""
+    with the body above the feature's upper end by the margin (the stylus's length less
+    the margin below that end), then (with ``top``, the frame Z of the part's top, mm)
+    over the depth it reaches with the body above the whole part (a counterbore too
+    narrow for the body above the feature); none without a probe body, where the stylus
+    reaches the whole feature (the other sections serve), or where it reaches nothing."""
     probe = machine.probe
     if probe.body_diameter <= 0.0 or kind not in REACH_SECTIONS:
-        return None
+        return ()
     low, high = feature.extent
     length = high - low
-    reach = probe.length - machine.margin
-    if length <= 0.0 or reach >= length or reach <= 0.0:
-        return None
     up = feature.axis[2] > 0.0  # the extent's high end is the upper one
-    fractions = []
-    for q in REACH_SECTIONS[kind]:
-        depth = (1.0 - q) * reach  # below the upper end
-        fractions.append(1.0 - depth / length if up else depth / length)
-    return tuple(fractions)
+    upper = feature.origin[2] + (high if up else low) * feature.axis[2]  # frame Z
+    out: list[tuple[float, ...]] = []
+    for above in (upper, *(() if top is None else (top,))):
+        deepest = above + machine.margin - probe.length  # frame Z of the lowest ball
+        reach = upper - max(deepest, upper - length)
+        if length <= 0.0 or reach <= 0.0 or reach >= length - 1e-9:
+            continue
+        fractions = []
+        for q in REACH_SECTIONS[kind]:
+            depth = (1.0 - q) * reach  # below the upper end
+            fractions.append(1.0 - depth / length if up else depth / length)
+        if tuple(fractions) not in out:
+            out.append(tuple(fractions))
+    return tuple(out)

@@ -253,9 +253,8 @@ def _candidates(resolved: ResolvedRevolved, part: Part | None, machine: MachineP
     part = _need_part(part, resolved.spec)
     f = resolved.feature
     low, high = f.extent
-    reached = reach_fractions(f, machine, resolved.spec.kind)
-    for fractions in (*ALTERNATIVE_SECTIONS[resolved.spec.kind],
-                      *(() if reached is None else (reached,))):
+    reached = reach_fractions(f, machine, resolved.spec.kind, part.bbox_max[2])
+    for fractions in (*ALTERNATIVE_SECTIONS[resolved.spec.kind], *reached):
         sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
         if all(s.reachable for s in sections):
             ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
