@@ -297,8 +297,23 @@ class MeshObstacle:
         key = (float(point[0]), float(point[1]), float(point[2]))
         hit = self._inside.get(key)
         if hit is None:
-            hit = self._inside[key] = bool(self._geometry()[1].contains(point[None])[0])
+            low, high = self.mesh.bounds
+            hit = self._inside[key] = bool(
+                np.all(point >= low) and np.all(point <= high)
+                and not self._sees_the_sky(point, float(high[2]))
+                and self._geometry()[1].contains(point[None])[0])
         return hit
+
+    def _sees_the_sky(self, point: np.ndarray, top: float) -> bool:
+        """Whether the vertical line from ``point`` up past the mesh's ``top`` (work Z)
+        meets no triangle: then ``point`` lies outside (one collision query, far
+        cheaper than the ray test it saves)."""
+        fcl = self.fcl
+        length = top + 1.0 - float(point[2])
+        needle = fcl.CollisionObject(fcl.Cylinder(1e-3, length), fcl.Transform(
+            point + np.array([0.0, 0.0, length / 2.0])))
+        return not fcl.collide(needle, self.part, fcl.CollisionRequest(),
+                               fcl.CollisionResult())
 
     def _shape(self, centre: np.ndarray, e: Element) -> Any:
         """The fcl object of element ``e`` with the ball's centre at ``centre``."""

@@ -167,11 +167,14 @@ def deepest(overlaps: Overlaps, parts: Sequence[Element], a: np.ndarray,
     spacing about the deepest."""
     length = float(np.linalg.norm(b - a))
 
-    solid = False  # the ball is always tested whole (its centre inside: one query)
+    solid = False
 
     def score(t: float) -> tuple[float, int]:
+        # the ball whole (its centre inside: one query), but where the sweep found the
+        # stylus too close (t = 0): it came there from outside
         found = [depth_at(overlaps, a + t * (b - a), e, SCAN_TOLERANCE, side_only=True,
-                          solid=solid or e.low is None, beneath=beneath)[0] for e in parts]
+                          solid=solid or (e.low is None and t > 0.0), beneath=beneath)[0]
+                 for e in parts]
         k = max(range(len(found)), key=lambda i: found[i])
         return found[k], k
 
