@@ -20,8 +20,12 @@ with its triangles, or the element wholly inside the material), so each is exact
 the mesh's chordal deviation.  Along a move the depth is taken at points from where the
 sweep first found the stylus too close to the move's end (every :data:`SPACING` mm, at
 most :data:`SAMPLES`), then refined about the deepest (:data:`REFINE` halvings of the
-spacing): each figure changes no faster than the stylus moves, so the greatest found is
-within half the last spacing of the greatest along the move.
+spacing): each figure changes no faster than the stylus moves, so the figure found is a
+lower bound of the greatest along the move, within half the last spacing of the greatest
+near the deepest point sampled (the deepest of all where the depth rises and falls once
+along the move, as through one wall).  A sample with no element meeting the part's
+surface is tested for an element wholly inside the material (the ball always, but where
+the sweep stopped: it came there from outside).
 
 Conventions: the ball's centre is the stylus position, the probe along +Z of the frame
 the move is in, heights along the probe from the ball's centre, mm.
