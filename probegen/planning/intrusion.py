@@ -23,9 +23,9 @@ most :data:`SAMPLES`), then refined about the deepest (:data:`REFINE` halvings o
 spacing): each figure changes no faster than the stylus moves, so the figure found is a
 lower bound of the greatest along the move, within half the last spacing of the greatest
 near the deepest point sampled (the deepest of all where the depth rises and falls once
-along the move, as through one wall).  A sample with no element meeting the part's
-surface is tested for an element wholly inside the material (the ball always, but where
-the sweep stopped: it came there from outside).
+along the move, as through one wall).  The search looks for the ball wholly inside the
+material at every sample but where the sweep stopped (it came there from outside), for
+the shank or the body so only when no element meets the part's surface at any sample.
 
 Conventions: the ball's centre is the stylus position, the probe along +Z of the frame
 the move is in, heights along the probe from the ball's centre, mm.
