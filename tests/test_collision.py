@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -49,8 +50,13 @@ def test_move_through_the_sphere_is_refused(planned) -> None:  # type: ignore[no
     body = (*p.program.body[:2], ir.Move((0.0, 0.0, -5.0), ir.MoveMode.PROTECTED))
     bad = ir.Program(p.program.setup, body)
     obstacle = obstacle_for(part, [t.sphere for t in p.sphere_tests])
-    with pytest.raises(CollisionError, match=r"segment 1 \(protected\).*cuts 2.015 mm into face 5"):
+    with pytest.raises(CollisionError, match=r"segment 1 \(protected\).*the stylus ball cuts "
+                                             r"([\d.]+) mm into face 5") as raised:
         check_program(bad, obstacle, p.sphere_tests, spec.machine)
+    # the depth is measured, not the sweep's bound: deepest where the ball's centre passes
+    # the sphere's (0, 0, 0): its radius 3 and the sphere's 12.5, less the sampling
+    depth = float(re.search(r"ball cuts ([\d.]+) mm", str(raised.value))[1])  # type: ignore[index]
+    assert 15.0 < depth <= 15.5 + 0.01
 
 
 def test_shank_is_checked(planned) -> None:  # type: ignore[no-untyped-def]

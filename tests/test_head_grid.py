@@ -145,7 +145,7 @@ def test_tilted_holes_planned_measured_or_left_out_with_the_reason(tilts: Path,
         "stands 2.00 deg off the feature's axis: no room: the stylus shank meets face 2 (a "
         "smaller or longer stylus, or another orientation) [segment 18 (touch PT 9) from "
         "(40.177, 28.646, -33.695) to (41.117, 27.707, -33.662): the stylus shank cuts "
-        "0.015 mm into face 2]",
+        "0.305 mm (0.305 mm in from its side, 32.162 mm up from its lower end) into face 2]",
         "R3 bore D10.000 (cylinder, faces 9): axis at A 86.3 B 3.7: not on the head's 7.5 "
         "deg grid: the nearest index A82.5 B0 stands 5.3 deg off the axis, more than 3.75 "
         "deg: needs a setup"]

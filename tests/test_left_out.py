@@ -34,7 +34,7 @@ REASONS = [
     "R2 bore D20.000 (cylinder, faces 8): blind, depth 2.000 mm: the ball reaches no section "
     "(it needs 3.500 mm below one: radius 3.000 + margin 0.500): a smaller stylus [no touch "
     "can be reached safely: touch 1 dropped: its approach from (6.000, 0.000, 19.000) to "
-    "(6.730, 0.000, 19.000): the stylus ball cuts 0.015 mm into face 10; 7 more touches "
+    "(6.730, 0.000, 19.000): the stylus ball cuts 2.000 mm into face 10; 7 more touches "
     "dropped]",
     "R3 bore D8.000 (cylinder, faces 9): axis (1.0000, 0.0000, 0.0000) is 90.0 deg from Z, "
     "not along the probe: needs an orientation or a setup",
@@ -202,6 +202,9 @@ def test_a_shank_collision_names_the_face_the_shank_meets(tmp_path: Path) -> Non
     ball, shank = obstacle.clearance(centre, stylus)
     assert ball > 0.5 and shank < 0.0
     said = describe(obstacle, ball - 0.25, shank - 0.25, 0.25, centre, stylus)
-    assert said.startswith("the stylus shank cuts 0.010 mm into face ")
+    # the depth measured: the roof (z 15-20) crosses the shank's axis and reaches 12 mm
+    # above its lower end (the ball's top, z = 8)
+    assert said.startswith("the stylus shank cuts 0.700 mm (across its axis, 12.000 mm up "
+                           "from its lower end) into face ")
     assert said.split(" into ")[1].split(";")[0] in roof
     assert floor in describe(obstacle, ball - 0.25, shank - 0.25, 0.25, centre)

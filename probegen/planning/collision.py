@@ -41,6 +41,7 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError
 from probegen.geometry.frames import rotation_to_z
 from probegen.machine.profile import MachineProfile
+from probegen.planning.intrusion import Element, Intrusion, deepest, elements, words
 from probegen.planning.orient import (
     LEVEL_SLACK,
     change_name,
@@ -130,6 +131,35 @@ class SphereObstacle:
         k = int(np.argmin(np.linalg.norm(self.centres - point, axis=1) - self.radii))
         return f"sphere {k + 1}"
 
+    def _gaps(self, centre: np.ndarray, e: Element) -> np.ndarray:
+        """The distance from element ``e`` (the ball's centre at ``centre``) to each
+        sphere, mm (negative: they overlap)."""
+        rel = self.centres - centre
+        if e.low is not None and e.high is not None:
+            axis_pt = np.zeros_like(rel)
+            axis_pt[:, 2] = np.clip(rel[:, 2], e.low, e.high)
+            rel = rel - axis_pt
+        gaps: np.ndarray = np.linalg.norm(rel, axis=1) - self.radii - e.radius
+        return gaps
+
+    def beneath(self, point: np.ndarray) -> float:
+        """How far ``point`` (in a sphere) lies from the sphere's surface, mm."""
+        return float((self.radii - np.linalg.norm(self.centres - point, axis=1)).max())
+
+    def overlaps(self, centre: np.ndarray, e: Element, solid: bool = True) -> bool:
+        """Whether element ``e`` with the ball's centre at ``centre`` overlaps a sphere
+        (``solid``: the same either way)."""
+        return bool((self._gaps(centre, e) < 0.0).any())
+
+    def clearance_of(self, centre: np.ndarray, e: Element) -> float:
+        """The distance from element ``e`` (ball's centre at ``centre``) to the spheres."""
+        return float(self._gaps(centre, e).min())
+
+    def face_of(self, centre: np.ndarray, e: Element) -> str:
+        """The sphere element ``e`` comes nearest (overlaps deepest), with the ball's
+        centre at ``centre``."""
+        return f"sphere {int(np.argmin(self._gaps(centre, e))) + 1}"
+
 
 class MeshObstacle:
     """A tessellated part; ``face_ids`` maps triangles to model face ids when known.
@@ -162,6 +192,9 @@ class MeshObstacle:
         shared per model, so a move checked once (one feature alone, then the whole
         program) is swept once."""
         self._inside: dict[tuple[float, float, float], bool] = {}
+        self.intrusions: dict[tuple[Any, ...], Intrusion | None] = {}
+        """The deepest intrusion of a stylus along a refused move, by (start, end,
+        stylus) (:func:`describe`: a move refused again is not measured again)."""
         self.floor = -MESH_TOLERANCE
         """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
 
@@ -264,33 +297,75 @@ class MeshObstacle:
         key = (float(point[0]), float(point[1]), float(point[2]))
         hit = self._inside.get(key)
         if hit is None:
-            hit = self._inside[key] = bool(self._geometry()[1].contains(point[None])[0])
+            low, high = self.mesh.bounds
+            hit = self._inside[key] = bool(
+                np.all(point >= low) and np.all(point <= high)
+                and not self._sees_the_sky(point, float(high[2]))
+                and self._geometry()[1].contains(point[None])[0])
         return hit
 
-    def shank_face(self, centre: np.ndarray, stylus: Stylus) -> tuple[str, str]:
-        """Which of the shank and the probe body comes nearest the part (or overlaps it
-        deepest) with the ball centre at ``centre``, and the face (or triangle) it
-        meets: the deepest contact, or one BVH distance query."""
+    def _sees_the_sky(self, point: np.ndarray, top: float) -> bool:
+        """Whether the vertical line from ``point`` up past the mesh's ``top`` (work Z)
+        meets no triangle: then ``point`` lies outside (one collision query, far
+        cheaper than the ray test it saves)."""
         fcl = self.fcl
-        found: list[tuple[float, int, str]] = []
-        for (obj, mid), what in zip(self._stylus(stylus)[1], ("shank", "probe body"),
-                                    strict=False):
-            obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
-            hit = fcl.CollisionResult()
-            fcl.collide(self.part, obj, fcl.CollisionRequest(num_max_contacts=16,
-                                                             enable_contact=True), hit)
-            tris = [(c.penetration_depth, max(int(c.b1), int(c.b2))) for c in hit.contacts]
-            if tris:
-                depth, tri = max(tris)
-                found.append((-depth, tri, what))
-                continue
+        length = top + 1.0 - float(point[2])
+        needle = fcl.CollisionObject(fcl.Cylinder(1e-3, length), fcl.Transform(
+            point + np.array([0.0, 0.0, length / 2.0])))
+        return not fcl.collide(needle, self.part, fcl.CollisionRequest(),
+                               fcl.CollisionResult())
+
+    def _shape(self, centre: np.ndarray, e: Element) -> Any:
+        """The fcl object of element ``e`` with the ball's centre at ``centre``."""
+        fcl = self.fcl
+        if e.low is None or e.high is None:
+            return fcl.CollisionObject(fcl.Sphere(e.radius), fcl.Transform(centre))
+        mid = centre + np.array([0.0, 0.0, (e.low + e.high) / 2.0])
+        return fcl.CollisionObject(fcl.Cylinder(e.radius, e.high - e.low), fcl.Transform(mid))
+
+    def overlaps(self, centre: np.ndarray, e: Element, solid: bool = True) -> bool:
+        """Whether element ``e`` (:mod:`probegen.planning.intrusion`) with the ball's
+        centre at ``centre`` overlaps the part: it meets a triangle of the mesh, or (with
+        ``solid``) lies wholly inside the material.  The point tested for the latter is
+        the ball's centre or the top of a cylinder's axis, which every smaller ball or
+        cylinder shortened from below of the search keeps: one inside test per place
+        (memoised)."""
+        fcl = self.fcl
+        if fcl.collide(self._shape(centre, e), self.part, fcl.CollisionRequest(),
+                       fcl.CollisionResult()):
+            return True
+        if not solid:
+            return False
+        top = 0.0 if e.high is None else e.high
+        return self.inside(centre + np.array([0.0, 0.0, top]))
+
+    def beneath(self, point: np.ndarray) -> float:
+        """How far ``point`` (in the material) lies from the part's surface, mm."""
+        fcl = self.fcl
+        return self._distance(fcl.Sphere(1e-6), fcl.Transform(point)) + MESH_TOLERANCE
+
+    def clearance_of(self, centre: np.ndarray, e: Element) -> float:
+        """The distance from element ``e`` (ball's centre at ``centre``) to the part less
+        the mesh's tolerance, mm."""
+        return self._to(self._shape(centre, e))
+
+    def face_of(self, centre: np.ndarray, e: Element) -> str:
+        """The face (or triangle) element ``e`` meets deepest with the ball's centre at
+        ``centre``, else the nearest one (one BVH query each)."""
+        fcl = self.fcl
+        obj = self._shape(centre, e)
+        hit = fcl.CollisionResult()
+        fcl.collide(self.part, obj, fcl.CollisionRequest(num_max_contacts=16,
+                                                         enable_contact=True), hit)
+        tris = [(c.penetration_depth, max(int(c.b1), int(c.b2))) for c in hit.contacts]
+        if tris:
+            tri = max(tris)[1]
+        else:
             near = fcl.DistanceResult()
             fcl.distance(self.part, obj, fcl.DistanceRequest(enable_nearest_points=True),
                          near)
-            found.append((float(near.min_distance), int(near.b1), what))
-        _, tri, what = min(found)
-        face = f"triangle {tri}" if self.face_ids is None else f"face {int(self.face_ids[tri])}"
-        return what, face
+            tri = int(near.b1)
+        return f"triangle {tri}" if self.face_ids is None else f"face {int(self.face_ids[tri])}"
 
     def name_at(self, point: np.ndarray) -> str:
         """The face (or triangle) nearest ``point``, by one BVH distance query."""
@@ -479,7 +554,7 @@ def check_program(program: ir.Program, obstacle: Obstacle, plans: Sequence[Any],
             raise CollisionError(
                 f"feature {feature or '-'}: segment {seg.index} ({kind}) from "
                 f"{fmt(a)} to {fmt(b)}: "
-                f"{describe(obstacle, seg.ball, seg.shank, clear, worst, stylus)}")
+                f"{describe(obstacle, seg.ball, seg.shank, clear, worst, stylus, b)}")
         outside.update((_t(a), _t(b)))
 
     for node in ir.walk(program.body):
@@ -612,18 +687,50 @@ def swept(obstacle: Obstacle, a: np.ndarray, b: np.ndarray, ea: float, eb: float
 
 
 def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
-         worst: np.ndarray, stylus: Stylus | None = None) -> str:
-    """What a sweep whose clearances (less ``required``) went negative ran into, e.g.
-    ``the stylus ball cuts 0.015 mm into face 3; expected ...``: the face nearest the
-    ball centre ``worst``, or for the shank or the probe body (with ``stylus``, on a
-    mesh) the one of them that meets the part and the face it meets (the ball's nearest
-    face is often the measured one, far below it)."""
-    part = "ball" if ball < shank else "shank or probe body"
+             worst: np.ndarray, stylus: Stylus | None = None,
+             end: np.ndarray | None = None) -> str:
+    """What a sweep whose clearances (less ``required``) went below zero ran into.
+
+    A clearance still positive: ``the stylus ball comes within 0.100 mm of face 3``.  One
+    at or below the sweep's floor (the part met): with ``stylus`` and an obstacle that
+    measures overlaps, how far the stylus cuts into the part along the move from
+    ``worst`` (where the sweep found it too close) to ``end`` (the move's end; ``worst``
+    itself without it), measured (:func:`probegen.planning.intrusion.deepest`): the
+    element that goes deepest (ball, shank or probe body), the depth and the face it
+    meets, e.g. ``the probe body cuts 5.100 mm (5.100 mm in from its side, 15.900 mm up
+    from its lower end) into face 24``; ``touches face 3`` when nothing overlaps (the
+    figure was within the mesh's tolerance).  Without them: the sweep's figure and the
+    face nearest the ball's centre (the ball) or the stylus's axis."""
     gap = min(ball, shank) + required
+    overlaps = getattr(obstacle, "overlaps", None)
+    face_of = getattr(obstacle, "face_of", None)
+    if gap < 0.0 and stylus is not None and overlaps is not None and face_of is not None:
+        parts = elements(stylus.ball, stylus.cylinders())
+        stop = worst if end is None else end
+        memo: dict[tuple[Any, ...], Intrusion | None] = getattr(obstacle, "intrusions", {})
+        key = (_t(worst), _t(stop), stylus)
+        if key not in memo:
+            memo[key] = deepest(overlaps, parts, worst, stop,
+                                getattr(obstacle, "beneath", None))
+        hit = memo[key]
+        if hit is None:
+            name = obstacle.name_at(worst)
+            who = "ball" if ball < shank else "shank"
+            return (f"the stylus {who} touches {name} (no overlap found: within the mesh's "
+                    f"{MESH_TOLERANCE:.3f} mm); expected a clearance of at least "
+                    f"{required:.3f} mm")
+        e = next(p for p in parts if p.name == hit.element)
+        who = "the probe body" if hit.element == "probe body" else f"the stylus {hit.element}"
+        return (f"{who} cuts {words(hit, e.radius)} into {face_of(hit.at, e)}; expected a "
+                f"clearance of at least {required:.3f} mm")
+    part = "ball" if ball < shank else "shank"
     how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
-    shank_face = getattr(obstacle, "shank_face", None)
-    if part != "ball" and stylus is not None and shank_face is not None:
-        part, name = shank_face(worst, stylus)
+    clearance_of = getattr(obstacle, "clearance_of", None)
+    if part == "shank" and stylus is not None and face_of is not None \
+            and clearance_of is not None:
+        parts = elements(stylus.ball, stylus.cylinders())[1:]
+        near = min(parts, key=lambda p: clearance_of(worst, p))
+        part, name = near.name, face_of(worst, near)
     else:
         name = obstacle.name_at(worst)
     who = "the probe body" if part == "probe body" else f"the stylus {part}"

@@ -26,7 +26,8 @@ if TYPE_CHECKING:
 _ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
 _SMALL = re.compile(r"inner radius ([\d.]+) mm: the safe circle R - r - d = [-\d.]+ mm: "
                     r"expected R > r \+ d")
-_HIT = re.compile(r"the stylus (ball|shank|holder)[^;]*?(?:into|of) face (\d+)")
+_HIT = re.compile(r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) mm)?"
+                  r"[^;]*?(?:into|of) face (\d+)")
 _TILTED = re.compile(r"at the nearest head index \w+ the stylus stands [\d.]+ deg off the "
                      r"feature's axis")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
@@ -137,7 +138,11 @@ def collision_reason(problem: str) -> str:
     if hit is None:
         text = _clean(problem)
         return text if len(text) <= LONGEST else text[:LONGEST - 5].rstrip() + " ..."
-    return (f"no room: the stylus {hit[1]} meets face {hit[2]} (a smaller or longer stylus, "
+    if hit[1] == "probe body":  # above the stylus: a longer one lifts it
+        deep = f", {hit[2]} mm deep" if hit[2] else ""
+        return (f"no room: the probe body meets face {hit[3]}{deep} (a longer stylus, or "
+                f"another orientation) [{_detail(problem)}]")
+    return (f"no room: the {hit[1]} meets face {hit[3]} (a smaller or longer stylus, "
             f"or another orientation) [{_detail(problem)}]")
 
 

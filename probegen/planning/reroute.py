@@ -83,7 +83,7 @@ class Sweeper:
         if min(ball, shank) - self.required >= 0.0:
             return None
         q = self.required
-        what = describe(self.obstacle, ball - q, shank - q, q, worst, self.stylus)
+        what = describe(self.obstacle, ball - q, shank - q, q, worst, self.stylus, pb)
         return f"from {fmt(pa)} to {fmt(pb)}: {what}"
 
     def refused(self, a: ArrayLike, b: ArrayLike) -> bool:

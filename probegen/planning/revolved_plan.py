@@ -24,6 +24,7 @@ from probegen import ir
 from probegen.errors import ModelError, PlanningError, ProbegenError, SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
+from probegen.planning.reach import reach_fractions
 from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
 from probegen.planning.revolved_geometry import ArcTooShortError
@@ -239,10 +240,11 @@ ALTERNATIVE_SECTIONS = {
 without ``sections`` lose touches to the collision check, in order."""
 
 
-def _candidates(resolved: ResolvedRevolved, part: Part | None
+def _candidates(resolved: ResolvedRevolved, part: Part | None, machine: MachineProfile
                 ) -> Iterator[ResolvedRevolved]:
-    """The resolved feature, then (without spec sections) its alternative sections,
-    each built only when asked for."""
+    """The resolved feature, then (without spec sections) its alternative sections, and
+    those within the stylus's reach with the probe body clear
+    (:func:`probegen.planning.reach.reach_fractions`), each built only when asked for."""
     yield resolved
     if resolved.spec.sections is not None:
         return
@@ -251,7 +253,8 @@ def _candidates(resolved: ResolvedRevolved, part: Part | None
     part = _need_part(part, resolved.spec)
     f = resolved.feature
     low, high = f.extent
-    for fractions in ALTERNATIVE_SECTIONS[resolved.spec.kind]:
+    reached = reach_fractions(f, machine, resolved.spec.kind, part.bbox_max[2])
+    for fractions in (*ALTERNATIVE_SECTIONS[resolved.spec.kind], *reached):
         sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
         if all(s.reachable for s in sections):
             ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
@@ -349,7 +352,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     free = free_fit(machine)
     best: tuple[ResolvedRevolved, Rerouted, str] | None = None
     own = 0  # the errors of the feature's own sections (the first candidate)
-    for k, candidate in enumerate(_candidates(resolved, part)):
+    for k, candidate in enumerate(_candidates(resolved, part, machine)):
         # other sections only with the retract that served the default ones best
         only = best[1].plan.sections[0].retract if k and best is not None else None
         safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
