@@ -124,6 +124,17 @@ def approaches(owner: Any, part: Part) -> list[ir.Vec3]:
     return [a for *_, a in sorted(out, key=lambda t: t[:2])]
 
 
+def cap_opening(owner: Any, part: Part) -> ir.Vec3:
+    """The direction a sphere's face opens to (unit, work coordinates): out of the
+    material from the face's pole (its record's axis points from the centre to the
+    face's centre of mass: a ball's cap opens along it, a cavity's against it)."""
+    from probegen import cad
+
+    axis = cad.face_by_id(part.model, owner.faces[0]).axis
+    sign = -1.0 if owner.inner else 1.0
+    return (sign * axis[0] + 0.0, sign * axis[1] + 0.0, sign * axis[2] + 0.0)
+
+
 def reorientable(owner: Any, machine: MachineProfile) -> bool:
     """Whether a recognised feature not reachable from above may be in another
     orientation: the machine turns its probe and the feature has an axis (not a sphere)."""
@@ -217,14 +228,16 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
     :func:`~probegen.planning.tilted.screen` finds, until one plans; None when none does
     (a sphere, a machine without a head, a feature with a work-offset action)."""
     head = machine.head
-    if head is None or owner.type == "sphere" or (
-            feature.actions.work_offset is not None or feature.actions.align is not None):
+    if head is None or feature.actions.work_offset is not None or (
+            feature.actions.align is not None):
         return None
+    sphere = owner.type == "sphere"  # never planned along an axis: the least tilt is 0
+    ends = [cap_opening(owner, part)] if sphere else approaches(owner, part)
     styli = rack_order(machine) if force is None else (stylus_named(machine, force,
                                                                     "stylus"),)
     obstacle = obstacle_for(part, [])
     tries = 0
-    for a in approaches(owner, part):
+    for a in ends:
         exact = frames.frame_for(a)
         own = part if frames.is_identity(exact) else part.turned(exact)
         own_clear = frame_clearance(part, Orientation(exact), clearance_z)
@@ -236,7 +249,7 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
                 continue
             ranked = screen(touches_in_work(touches, exact), feature.kind, a, obstacle,
                             probe_stylus(m, m.probe.ball_radius), m.margin / 2.0, head,
-                            tilt_bound(head), free_fit(m))
+                            -1.0 if sphere else tilt_bound(head), free_fit(m))
             for angles in ranked[:TRIED]:
                 tries += 1
                 if tries > MOST_PLANS:
