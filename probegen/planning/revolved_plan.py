@@ -244,11 +244,13 @@ ALTERNATIVE_SECTIONS = {
     "circle": ((0.25,), (0.75,)),
     "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
     "cone": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
-    "sphere": ((0.5, 0.9), (0.3, 0.7)),
+    "sphere": ((0.5, 0.9), (0.3, 0.7), (0.1, 0.3)),
     "torus": ((0.4, 0.65, 0.9), (0.1, 0.35, 0.6)),
 }
 """Sections tried (fractions of the axial extent) when the default ones of a spec
-without ``sections`` lose touches to the collision check, in order."""
+without ``sections`` lose touches to the collision check, in order (a sphere's last
+pair near its pole: the blend in a pocket's corner, an octant, has full circles only
+there)."""
 
 
 def _candidates(resolved: ResolvedRevolved, part: Part | None, tilted: bool = False
@@ -405,16 +407,22 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
 def unrouted(feature: RevolvedSpec, part: Part, machine: MachineProfile,
              clearance_z: float) -> FeaturePlan | None:
     """The touches of ``feature`` on ``part`` as M2 plans them before the collision
-    check (its default sections whether a probe along the axis reaches them or not, the
-    probe's approach as retract): what :func:`probegen.planning.tilted.screen` screens
-    the head's indices with; None when it does not plan."""
+    check (its default sections whether a probe along the axis reaches them or not, else
+    the first :data:`ALTERNATIVE_SECTIONS` that plan; the smallest retract): what
+    :func:`probegen.planning.tilted.screen` screens the head's indices with; None when
+    it does not plan."""
     try:
         resolved = resolve_revolved(feature, part, tilted=True)
-        sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
-        retract = _retracts(feature, machine, sections)[-1]
-        return _plan_touches(sections, feature, machine, retract, clearance_z)
-    except (ProbegenError, IndexError):
+    except ProbegenError:
         return None
+    for candidate in _candidates(resolved, part, tilted=True):
+        sections = [section_of(feature.id, candidate.feature, s) for s in candidate.sections]
+        try:
+            retract = _retracts(feature, machine, sections)[-1]
+            return _plan_touches(sections, feature, machine, retract, clearance_z)
+        except (ProbegenError, IndexError):
+            continue
+    return None
 
 
 def resolved_in(turn: ir.Orient, resolved: ResolvedRevolved) -> ResolvedRevolved:
