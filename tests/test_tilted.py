@@ -111,3 +111,65 @@ def test_neck_under_a_ball_measured_with_the_stylus_leaning_out(overhang: Path,
     assert np.linalg.norm(d - np.dot(d, axis) * axis) < TOL
     assert abs(abs(float(np.dot(np.asarray(found.direction), axis))) - 1.0) < 1e-6
     assert found.diameter == pytest.approx(2.0 * NECK[3], abs=TOL)
+
+
+@pytest.fixture(scope="module")
+def tunnel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A block 60 x 40 x 40 from the origin with a tunnel 20 x 30 x 20 (x 20..40, y 10..40,
+    z 10..30) open only at its +Y end, every inner edge blended with R3.5: the back
+    wall's corners are sphere octants, the two under the roof opening 35 deg below the
+    horizontal (beyond the head's A 105), the vertical blends of the back wall closed
+    above by the roof; as STEP."""
+    from build123d import Align, Box, Pos, export_step, fillet
+
+    block = Box(60.0, 40.0, 40.0, align=(Align.MIN, Align.MIN, Align.MIN))
+    hole = Pos(20.0, 20.0, 10.0) * Box(20.0, 30.0, 20.0,
+                                       align=(Align.MIN, Align.MIN, Align.MIN))
+    cut = block - hole
+    inner = [e for e in cut.edges() if 19.9 < e.center().X < 40.1
+             and 9.9 < e.center().Z < 30.1 and e.center().Y < 39.9]
+    path = tmp_path_factory.mktemp("tilted") / "tunnel.step"
+    export_step(fillet(inner, 3.5), str(path))
+    return path
+
+
+def test_tunnel_corner_blends_measured_with_the_head_leaning(tunnel: Path,
+                                                             tmp_path: Path) -> None:
+    """The roof corners' octants (spheres, never planned along an axis) at A105 leaning
+    into the tunnel's mouth, the back wall's vertical blends under the roof leaning out of
+    it; measured on the virtual CMM to 1 µm (centre and diameter; axis and diameter)."""
+    part = cad.load_part(tunnel)
+    machine = load_profile(CMM)
+    spec, notes = all_revolved_spec(part, machine)
+    features = {f"R{f.id}": f for f in revolved_features(part)}
+    roof = sorted(k for k, f in features.items() if f.type == "sphere"
+                  and f.extent[1] > 1.0)  # the octants above their centre: under the roof
+    blends = sorted(k for k, f in features.items() if f.type == "cylinder"
+                    and abs(f.axis[2]) > 0.99)
+    assert len(roof) == 2 and len(blends) == 2
+    assert not notes, notes
+    planned = plan_program(spec, runtime_variables=False, part=part)
+    assert planned.clearance.minimum >= 0.0
+    heads = {o.plan.spec.id: o.orientation for o in planned.oriented}
+    for fid in roof:
+        assert heads[fid].head is not None and heads[fid].head[0] == 105.0, fid
+    for fid in blends:
+        assert heads[fid].head is not None and heads[fid].tilt > 3.75, fid
+    text = get_dialect("dmis").generate(planned.program)
+    check = check_points(text, part)
+    assert check.points and not check.off_model and not check.inward, check.text()
+    program, out = tmp_path / "tunnel.dmi", tmp_path / "tunnel.out"
+    program.write_text(text)
+    code = main(["sim", str(program), "--part", str(tunnel), "--machine", str(CMM),
+                 "--offset", *map(str, OFFSET), "-o", str(out)])
+    assert code == 0
+    output = parse_dmis_output(out.read_text(), strict=True)
+    for fid in roof + blends:
+        f, found = features[fid], output.feature(fid)
+        d = np.asarray(found.position) - (np.asarray(f.origin) + np.asarray(OFFSET))
+        if f.type == "cylinder":
+            axis = np.asarray(f.axis)
+            d = d - np.dot(d, axis) * axis
+            assert abs(abs(float(np.dot(np.asarray(found.direction), axis))) - 1.0) < 1e-6
+        assert np.linalg.norm(d) < TOL, fid
+        assert found.diameter == pytest.approx(2.0 * f.radius, abs=TOL), fid
