@@ -22,7 +22,8 @@ from probegen.spec.model import load_spec
 PROFILE = REPO / "samples/machines/vmc-fanuc.toml"
 
 
-def _plan(tmp_path: Path, obstacle: object):  # type: ignore[no-untyped-def]
+def _plan(tmp_path: Path, obstacle: object,  # type: ignore[no-untyped-def]
+          profile: Path = PROFILE):
     from build123d import Align, Box, Cylinder, Pos, export_step
 
     base = Pos(0, 0, -5) * Box(80, 80, 5, align=(Align.CENTER, Align.CENTER, Align.MIN))
@@ -31,7 +32,7 @@ def _plan(tmp_path: Path, obstacle: object):  # type: ignore[no-untyped-def]
     export_step(base + boss + obstacle, model)
     spec = tmp_path / "boss.toml"
     spec.write_text(f'[part]\nmodel = "{model.as_posix()}"\n\n[machine]\nprofile = '
-                    f'"{PROFILE.as_posix()}"\nclearance_z = 100.0\n\n[[feature]]\nid = "B"\n'
+                    f'"{profile.as_posix()}"\nclearance_z = 100.0\n\n[[feature]]\nid = "B"\n'
                     f'kind = "circle"\nat = [10.0, 0.0, 5.0]\nsections = [5.0]\npoints = 8\n')
     return plan_program(load_spec(spec), runtime_variables=True)
 
@@ -73,8 +74,15 @@ def test_no_way_down_above_the_first_touch_enters_elsewhere(tmp_path: Path) -> N
     # a bridge over the first safe point, higher than the 50 mm shank reaches from the
     # section (z 60..63), carried by a column far away: no way down there, but the
     # station itself is clear
+    # (a probe without a stated body: the OMP40's 40 mm body of vmc-fanuc.toml, right
+    # above the shank, would meet the bridge from most of the stations)
+    sample = PROFILE.read_text()
+    assert sample.count("\nbody_diameter = 40.0\n") == 1
+    bodiless = tmp_path / "vmc-fanuc-no-body.toml"
+    bodiless.write_text(sample.replace("\nbody_diameter = 40.0\n", "\n")
+                        .replace("\nbody_length = 50.0\n", "\n"))
     bridge = _box(12.0, 40.0, -2.0, 2.0, 60.0, 63.0) + _box(36.0, 40.0, -2.0, 2.0, 0.0, 60.0)
-    planned = _plan(tmp_path, bridge)
+    planned = _plan(tmp_path, bridge, bodiless)
     (b,) = planned.revolved
     assert len(b.normals) == 8
     first_safe = b.plan.path[1]
