@@ -31,11 +31,13 @@ from probegen import ir
 from probegen.errors import CollisionError, PlanningError, ProbegenError
 from probegen.ir import frames
 from probegen.machine.profile import MachineProfile, Stylus
+from probegen.planning.collision import obstacle_for, probe_stylus
 from probegen.planning.orient import (
     Orientation,
     can_orient,
     changes,
     frame_clearance,
+    head_direction,
     identity_of,
     index_height,
     needs_index,
@@ -46,6 +48,7 @@ from probegen.planning.orient import (
     over_point,
     pick_stylus,
     select_node,
+    tilt_bound,
     to_frame,
     to_work,
 )
@@ -55,7 +58,12 @@ from probegen.planning.revolved_plan import (
     check_alone,
     find_owner,
     plan_revolved,
+    resolved_in,
+    unrouted,
 )
+from probegen.planning.styli import profile_with, rack_order, stylus_named
+from probegen.planning.tilted import MOST_PLANS, TRIED, product_t, screen, touches_in_work, view_of
+from probegen.planning.well_posed import free_fit
 from probegen.spec.model import RevolvedSpec
 
 if TYPE_CHECKING:
@@ -116,6 +124,17 @@ def approaches(owner: Any, part: Part) -> list[ir.Vec3]:
     return [a for *_, a in sorted(out, key=lambda t: t[:2])]
 
 
+def cap_opening(owner: Any, part: Part) -> ir.Vec3:
+    """The direction a sphere's face opens to (unit, work coordinates): out of the
+    material from the face's pole (its record's axis points from the centre to the
+    face's centre of mass: a ball's cap opens along it, a cavity's against it)."""
+    from probegen import cad
+
+    axis = cad.face_by_id(part.model, owner.faces[0]).axis
+    sign = -1.0 if owner.inner else 1.0
+    return (sign * axis[0] + 0.0, sign * axis[1] + 0.0, sign * axis[2] + 0.0)
+
+
 def reorientable(owner: Any, machine: MachineProfile) -> bool:
     """Whether a recognised feature not reachable from above may be in another
     orientation: the machine turns its probe and the feature has an axis (not a sphere)."""
@@ -150,6 +169,21 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         plan_revolved(feature, part, machine, clearance_z)  # the SpecError of no model
         raise AssertionError("unreachable")  # pragma: no cover
     owner = find_owner(feature, part)
+    try:
+        return _plan_along(feature, owner, part, machine, clearance_z, force)
+    except PlanningError:
+        tilted = part.memo(("tilted plan", feature, machine, clearance_z),
+                           lambda: _plan_tilted(feature, owner, part, machine, clearance_z,
+                                                force))
+        if tilted is None:
+            raise
+        return tilted
+
+
+def _plan_along(feature: RevolvedSpec, owner: Any, part: Part, machine: MachineProfile,
+                clearance_z: float, force: str | None) -> OrientedPlan:
+    """:func:`plan_oriented` with the probe along the feature's axis (or at the head's
+    index nearest it)."""
     if owner.accessible or not reorientable(owner, machine):
         s, plan = pick_stylus(machine, _planner(feature, part, clearance_z), force)
         return OrientedPlan(plan, identity_of(machine), s, part, clearance_z)
@@ -183,6 +217,54 @@ def plan_oriented(feature: RevolvedSpec, part: Part | None, machine: MachineProf
         raise errors[0]
     why = "; ".join(dict.fromkeys(reasons)) or "no open end to approach it from"
     raise PlanningError(f"{feature.where}: {why}")
+
+
+def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: MachineProfile,
+                 clearance_z: float, force: str | None) -> OrientedPlan | None:
+    """A feature the probe along its axis does not measure, probed by a CMM's head at an
+    index that leans the stylus off the axis (:mod:`probegen.planning.tilted`): out of
+    each end :func:`approaches` gives, with each stylus of the rack (largest first, or
+    the one the spec forces), the best :data:`~probegen.planning.tilted.TRIED` indices
+    :func:`~probegen.planning.tilted.screen` finds, until one plans; None when none does
+    (a sphere, a machine without a head, a feature with a work-offset action)."""
+    head = machine.head
+    if head is None or feature.actions.work_offset is not None or (
+            feature.actions.align is not None):
+        return None
+    sphere = owner.type == "sphere"  # never planned along an axis: the least tilt is 0
+    ends = [cap_opening(owner, part)] if sphere else approaches(owner, part)
+    styli = rack_order(machine) if force is None else (stylus_named(machine, force,
+                                                                    "stylus"),)
+    obstacle = obstacle_for(part, [])
+    tries = 0
+    for a in ends:
+        exact = frames.frame_for(a)
+        own = part if frames.is_identity(exact) else part.turned(exact)
+        own_clear = frame_clearance(part, Orientation(exact), clearance_z)
+        own_feature = in_frame(feature, exact)
+        for s in styli:
+            m = profile_with(machine, s)
+            touches = unrouted(own_feature, own, m, own_clear)
+            if touches is None:
+                continue
+            ranked = screen(touches_in_work(touches, exact), feature.kind, a, obstacle,
+                            probe_stylus(m, m.probe.ball_radius), m.margin / 2.0, head,
+                            -1.0 if sphere else tilt_bound(head), free_fit(m))
+            for angles in ranked[:TRIED]:
+                tries += 1
+                if tries > MOST_PLANS:
+                    return None
+                index = frames.frame_for(head_direction(*angles))
+                o = Orientation(index, angles, (), exact)
+                turned = part if o.identity else part.turned(index)
+                clear = frame_clearance(part, o, clearance_z)
+                try:
+                    plan = plan_revolved(own_feature, own, m, own_clear,
+                                         view_of(index, exact, turned, clear))
+                except PlanningError:
+                    continue
+                return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
+    return None
 
 
 def _at_index(planner: Callable[[MachineProfile], RevolvedPlan], feature: RevolvedSpec,
@@ -227,7 +309,7 @@ def at_index(plan: RevolvedPlan, o: Orientation, clearance_z: float) -> Revolved
         PlanningError: a point of the plan lies above the index frame's clearance level.
     """
     assert o.exact is not None
-    turn = ir.Orient("EXACT", _product_t(o.rotation, o.exact))
+    turn = ir.Orient("EXACT", product_t(o.rotation, o.exact))
     axis = frames.direction_to_work(turn, (0.0, 0.0, 1.0))
 
     def moved(p: PathPoint) -> PathPoint:
@@ -246,26 +328,9 @@ def at_index(plan: RevolvedPlan, o: Orientation, clearance_z: float) -> Revolved
         raise PlanningError(f"{plan.spec.where}: at the head index {orient_name(o, 0)}: a "
                             f"point of the plan at frame z = {top:.3f}, expected none above "
                             f"the clearance level {clearance_z:.3f}")
-    feature = plan.resolved.feature
-    resolved = replace(plan.resolved, feature=replace(
-        feature, origin=frames.to_work(turn, feature.origin),
-        axis=frames.direction_to_work(turn, feature.axis),
-        sections=_sections_at(turn, feature.sections)),
-        sections=_sections_at(turn, plan.resolved.sections))
-    return replace(plan, resolved=resolved,
+    return replace(plan, resolved=resolved_in(turn, plan.resolved),
                    plan=replace(plan.plan, path=path, clear_z=clearance_z),
                    definition=frames.definition_in_work(turn, plan.definition))
-
-
-def _sections_at(turn: ir.Orient, sections: Sequence[Any]) -> tuple[Any, ...]:
-    """Recognised sections (``cad.revolved.FeatureSection``) with their centres turned."""
-    return tuple(replace(s, centre=frames.to_work(turn, s.centre)) for s in sections)
-
-
-def _product_t(a: frames.Rotation, b: frames.Rotation) -> frames.Rotation:
-    """``aᵀ·b``."""
-    return tuple(tuple(sum(a[k][i] * b[k][j] for k in range(3))  # type: ignore[return-value]
-                       for j in range(3)) for i in range(3))
 
 
 @dataclass(frozen=True, slots=True)

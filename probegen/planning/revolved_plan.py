@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from probegen import ir
 from probegen.errors import ModelError, PlanningError, ProbegenError, SpecError
+from probegen.ir import frames
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.reach import reach_fractions
@@ -29,6 +30,7 @@ from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
 from probegen.planning.revolved_geometry import ArcTooShortError
 from probegen.planning.setup import make_setup
+from probegen.planning.tilted import View, express, feature_in, sections_in
 from probegen.planning.well_posed import IllPosedError, free_fit, refused_reason, unevaluable
 from probegen.spec.model import RevolvedSpec, Spec
 
@@ -101,8 +103,12 @@ def find_owner(feature: RevolvedSpec, part: Part) -> Any:
     return owner
 
 
-def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolved:
-    """Find the recognised feature and its sections.
+def resolve_revolved(feature: RevolvedSpec, part: Part | None, *,
+                     tilted: bool = False) -> ResolvedRevolved:
+    """Find the recognised feature and its sections (``tilted``: for a probe standing
+    off the feature's axis, :mod:`probegen.planning.tilted`: a section is taken where
+    it has arcs, whether a probe along the axis reaches it or not; the collision check
+    of the tilted probe judges).
 
     Raises:
         SpecError: no model; a depth outside the feature.
@@ -114,18 +120,18 @@ def resolve_revolved(feature: RevolvedSpec, part: Part | None) -> ResolvedRevolv
 
     part = _need_part(part, feature)
     owner = find_owner(feature, part)
-    if not owner.accessible:
+    if not owner.accessible and not tilted:
         raise PlanningError(f"{feature.where}: revolved feature {owner.id} ({owner.type}, "
                             f"faces {','.join(map(str, owner.faces))}) is not accessible: "
                             f"{owner.reason}")
     sections: tuple[Any, ...]
     if feature.sections is None:
-        sections = _default_sections(part, owner, feature.kind, section_at)
+        sections = _default_sections(part, owner, feature.kind, section_at, tilted)
     else:
         sections = tuple(section_at(part, owner, _axial(feature, owner, k, depth))
                          for k, depth in enumerate(feature.sections))
     for k, s in enumerate(sections):
-        if not s.reachable:
+        if not usable(s, tilted):
             raise PlanningError(f"{feature.where}.sections[{k}]: the section at "
                                 f"z = {s.centre[2]:.4f} is not accessible: {s.reason}")
     z_sorted = tuple(sorted(sections, key=lambda s: -s.centre[2]))
@@ -142,19 +148,25 @@ spheres)."""
 SPHERE_SECOND = 0.75
 
 
-def _default_sections(part: Part, owner: Any, kind: str, section_at: Any
-                      ) -> tuple[Any, ...]:
-    """The reachable default sections of ``owner`` for ``kind`` (see
+def usable(section: Any, tilted: bool) -> bool:
+    """Whether a recognised section can be planned: reachable by a probe along the axis;
+    with ``tilted`` (a probe standing off it), any section with arcs."""
+    return bool(section.arcs) if tilted else bool(section.reachable)
+
+
+def _default_sections(part: Part, owner: Any, kind: str, section_at: Any,
+                      tilted: bool = False) -> tuple[Any, ...]:
+    """The reachable (:func:`usable`) default sections of ``owner`` for ``kind`` (see
     :data:`DEFAULT_SECTIONS`); the recognised ones when none of these is reachable."""
     low, high = owner.extent
-    recognised = tuple(s for s in owner.sections if s.reachable)
+    recognised = tuple(s for s in owner.sections if usable(s, tilted))
     if kind == "cylinder":
         return recognised
     if kind == "sphere":
         extra = section_at(part, owner, low + SPHERE_SECOND * (high - low))
-        return recognised + ((extra,) if extra.reachable else ())
+        return recognised + ((extra,) if usable(extra, tilted) else ())
     chosen = tuple(s for s in (section_at(part, owner, low + q * (high - low))
-                               for q in DEFAULT_SECTIONS[kind]) if s.reachable)
+                               for q in DEFAULT_SECTIONS[kind]) if usable(s, tilted))
     return chosen or recognised
 
 
@@ -233,14 +245,17 @@ ALTERNATIVE_SECTIONS = {
     "circle": ((0.25,), (0.75,)),
     "cylinder": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
     "cone": ((0.55, 0.9), (0.1, 0.9), (0.4, 0.6)),
-    "sphere": ((0.5, 0.9), (0.3, 0.7)),
+    "sphere": ((0.5, 0.9), (0.3, 0.7), (0.1, 0.3)),
     "torus": ((0.4, 0.65, 0.9), (0.1, 0.35, 0.6)),
 }
 """Sections tried (fractions of the axial extent) when the default ones of a spec
-without ``sections`` lose touches to the collision check, in order."""
+without ``sections`` lose touches to the collision check, in order (a sphere's last
+pair near its pole: the blend in a pocket's corner, an octant, has full circles only
+there)."""
 
 
-def _candidates(resolved: ResolvedRevolved, part: Part | None, machine: MachineProfile
+def _candidates(resolved: ResolvedRevolved, part: Part | None, machine: MachineProfile,
+                tilted: bool = False
                 ) -> Iterator[ResolvedRevolved]:
     """The resolved feature, then (without spec sections) its alternative sections, and
     those within the stylus's reach with the probe body clear
@@ -256,17 +271,20 @@ def _candidates(resolved: ResolvedRevolved, part: Part | None, machine: MachineP
     reached = reach_fractions(f, machine, resolved.spec.kind, part.bbox_max[2])
     for fractions in (*ALTERNATIVE_SECTIONS[resolved.spec.kind], *reached):
         sections = [section_at(part, f, low + q * (high - low)) for q in fractions]
-        if all(s.reachable for s in sections):
+        if all(usable(s, tilted) for s in sections):
             ordered = tuple(sorted(sections, key=lambda s: -s.centre[2]))
             yield ResolvedRevolved(resolved.spec, f, ordered)
 
 
 def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z: float,
                sweeper: Sweeper, errors: list[ProbegenError],
-               retract_only: float | None = None) -> Rerouted | None:
+               retract_only: float | None = None, view: View | None = None
+               ) -> Rerouted | None:
     """The rerouted plan of one choice of sections with the first retract of
     :func:`_retracts` (or ``retract_only``) that keeps every touch, else the one that
-    keeps the most (None when none plans; the reasons go to ``errors``)."""
+    keeps the most (None when none plans; the reasons go to ``errors``); with ``view``
+    the plan is expressed in its frame (:func:`probegen.planning.tilted.express`) and
+    rerouted there (``sweeper`` is the view's)."""
     feature = resolved.spec
     sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
     best: Rerouted | None = None
@@ -275,7 +293,7 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
     for retract in retracts:
         try:
             plan = _plan_touches(sections, feature, machine, retract, clearance_z)
-            safe = reroute(plan, sweeper)
+            safe = reroute(plan if view is None else express(plan, view), sweeper)
         except RerouteError as exc:  # a CollisionError, itself a PlanningError
             errors.append(RerouteError(f"{feature.where}: {exc}"))
             continue
@@ -284,7 +302,7 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
             continue
         if best is None or len(safe.dropped) < len(best.dropped):
             best = safe
-        if not safe.dropped:
+        if not safe.dropped or view is not None:  # a leaning stylus drops touches
             break
     return best
 
@@ -321,7 +339,7 @@ def _touches(plan: FeaturePlan) -> int:
 
 
 def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProfile,
-                  clearance_z: float) -> RevolvedPlan:
+                  clearance_z: float, view: View | None = None) -> RevolvedPlan:
     """Resolve and plan one revolved feature (method M2) entered from ``clearance_z``,
     made safe against the part (:func:`probegen.planning.reroute.reroute`).
 
@@ -338,35 +356,43 @@ def plan_revolved(feature: RevolvedSpec, part: Part | None, machine: MachineProf
     The plan is kept on the part by (spec feature, machine, clearance level):
     ``--all-revolved`` plans each feature to choose the spec, then the program plans the
     spec; ``ingest`` plans the program, then each feature again.
+
+    With ``view`` (a probe standing off the feature's axis,
+    :mod:`probegen.planning.tilted`) the feature is planned on ``part`` (turned into its
+    own frame) at ``clearance_z`` and probed in the view's frame: the plan, its
+    feature and definition come back in the view's coordinates.
     """
     loaded = _need_part(part, feature)
-    return loaded.memo(("revolved plan", feature, machine, clearance_z),
-                       lambda: _plan_revolved(feature, loaded, machine, clearance_z))
+    return loaded.memo(("revolved plan", feature, machine, clearance_z, view),
+                       lambda: _plan_revolved(feature, loaded, machine, clearance_z, view))
 
 
 def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
-                   clearance_z: float) -> RevolvedPlan:
-    resolved = resolve_revolved(feature, part)
-    sweeper = Sweeper(obstacle_for(part, []), machine, machine.probe.ball_radius)
+                   clearance_z: float, view: View | None) -> RevolvedPlan:
+    tilted = view is not None
+    resolved = resolve_revolved(feature, part, tilted=tilted)
+    probed = part if view is None else view.part
+    sweeper = Sweeper(obstacle_for(probed, []), machine, machine.probe.ball_radius)
     errors: list[ProbegenError] = []
     free = free_fit(machine)
     best: tuple[ResolvedRevolved, Rerouted, str] | None = None
     own = 0  # the errors of the feature's own sections (the first candidate)
-    for k, candidate in enumerate(_candidates(resolved, part, machine)):
+    for k, candidate in enumerate(_candidates(resolved, part, machine, tilted)):
         # other sections only with the retract that served the default ones best
         only = best[1].plan.sections[0].retract if k and best is not None else None
-        safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only)
+        safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only, view)
         own = own if k else len(errors)
         if safe is None:
             continue
-        why = unevaluable(feature.kind, candidate.feature, safe.plan, free)
+        seen = candidate.feature if view is None else feature_in(view.turn, candidate.feature)
+        why = unevaluable(feature.kind, seen, safe.plan, free)
         if best is None or (not why, _touches(safe.plan)) > (not best[2],
                                                               _touches(best[1].plan)):
             notes = safe.notes if not k else (
                 "default sections lose touches; measured at z = " + ", ".join(
                     f"{s.centre[2]:.3f}" for s in candidate.sections), *safe.notes)
             best = (candidate, replace(safe, notes=tuple(notes)), why)
-        if not safe.dropped and not why:
+        if not why and (not safe.dropped or tilted):  # a leaning stylus drops touches
             break
     if best is None:
         # the most permissive attempt's reason: the smallest retract on the feature's
@@ -375,7 +401,38 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     chosen, safe, why = best
     if why:
         raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free)}")
+    if view is not None:
+        return RevolvedPlan(feature, resolved_in(view.turn, chosen), safe.plan,
+                            frames.definition_in_work(view.turn, definition(chosen)),
+                            safe.notes)
     return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
+
+
+def unrouted(feature: RevolvedSpec, part: Part, machine: MachineProfile,
+             clearance_z: float) -> FeaturePlan | None:
+    """The touches of ``feature`` on ``part`` as M2 plans them before the collision
+    check (its default sections whether a probe along the axis reaches them or not, else
+    the first :data:`ALTERNATIVE_SECTIONS` that plan; the smallest retract): what
+    :func:`probegen.planning.tilted.screen` screens the head's indices with; None when
+    it does not plan."""
+    try:
+        resolved = resolve_revolved(feature, part, tilted=True)
+    except ProbegenError:
+        return None
+    for candidate in _candidates(resolved, part, machine, tilted=True):
+        sections = [section_of(feature.id, candidate.feature, s) for s in candidate.sections]
+        try:
+            retract = _retracts(feature, machine, sections)[-1]
+            return _plan_touches(sections, feature, machine, retract, clearance_z)
+        except (ProbegenError, IndexError):
+            continue
+    return None
+
+
+def resolved_in(turn: ir.Orient, resolved: ResolvedRevolved) -> ResolvedRevolved:
+    """A resolved feature with its recognised feature and sections turned by ``turn``."""
+    return replace(resolved, feature=feature_in(turn, resolved.feature),
+                   sections=sections_in(turn, resolved.sections))
 
 
 def revolved_nodes(p: RevolvedPlan, machine: MachineProfile,
