@@ -107,11 +107,7 @@ def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
                 f"{_needs(machine, least)}: a smaller stylus")
     arcs = _ARCS.search(problem)
     if arcs:
-        longest = max(float(a) for a in arcs[2].split(", "))
-        end = float(arcs[1])
-        return (f"arc too short: the longest arc of the section measured is {longest:.3f} "
-                f"mm, the ball D{2.0 * r:.3f} needs {2.0 * end:.3f} mm (its radius and the "
-                f"margin {end - r:.3f} mm at each end): a smaller stylus")
+        return _arc_reason(max(float(a) for a in arcs[2].split(", ")), float(arcs[1]), r, m)
     tilted = _TILTED.search(problem)
     if tilted is not None and _HIT.search(problem):
         rest = problem[tilted.end():].removeprefix(": it collides: ")
@@ -129,6 +125,22 @@ def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
         if _HIT.search(problem):
             return f"no touch can be reached safely: {collision_reason(problem)}"
     return _clean(problem)
+
+
+def _arc_reason(longest: float, end: float, r: float, m: float) -> str:
+    """The reason of a section's arcs too short (mm: the ``longest`` arc, the smallest
+    stylus's full end margin ``end`` = ball radius ``r`` + margin ``m``).  The planner
+    retries a short arc with the margin alone at each end
+    (:func:`probegen.planning.revolved_plan.plan_revolved`), which no ball changes: an
+    arc no longer than twice the margin is too short for every stylus (the part's limit
+    with this margin), not a stylus too large."""
+    if longest <= 2.0 * m + 1e-9:
+        return (f"arc too short: the longest arc of the section measured is {longest:.3f} "
+                f"mm, no longer than the margin {m:.3f} mm that every stylus keeps from "
+                f"each end ({2.0 * m:.3f} mm): the part's limit with the profile's margin")
+    return (f"arc too short: the longest arc of the section measured is {longest:.3f} "
+            f"mm, the ball D{2.0 * r:.3f} needs {2.0 * end:.3f} mm (its radius and the "
+            f"margin {end - r:.3f} mm at each end): a smaller stylus")
 
 
 def collision_reason(problem: str) -> str:
