@@ -31,7 +31,7 @@ from probegen.planning import plan_program
 from probegen.planning.oriented import plan_oriented
 from probegen.planning.revolved_spec import all_revolved_spec
 from probegen.planning.tilted import head_indices
-from probegen.results import parse_dmis_output
+from probegen.results import DmisOutput, parse_dmis_output
 
 sys.path.insert(0, str(REPO / "benchmarks"))
 from points_on_model import check_points  # noqa: E402  (the benchmark's own check)
@@ -45,6 +45,19 @@ NECK = (30.0, 30.0, 20.0, 10.0, 12.0)
 """The neck: centre x, y, foot z, radius, height, mm."""
 BALL = 15.0
 """The ball's radius, mm; its centre 13 mm above the neck's top."""
+
+
+def _run(text: str, part: cad.Part, model: Path, tmp_path: Path) -> DmisOutput:
+    """The DMIS program's points checked on the model (on it, vectors outward), then the
+    program run on the virtual CMM with the part placed off by OFFSET: its output."""
+    check = check_points(text, part)
+    assert check.points and not check.off_model and not check.inward, check.text()
+    program, out = tmp_path / f"{model.stem}.dmi", tmp_path / f"{model.stem}.out"
+    program.write_text(text)
+    code = main(["sim", str(program), "--part", str(model), "--machine", str(CMM),
+                 "--offset", *map(str, OFFSET), "-o", str(out)])
+    assert code == 0
+    return parse_dmis_output(out.read_text(), strict=True)
 
 
 @pytest.fixture(scope="module")
@@ -96,15 +109,7 @@ def test_neck_under_a_ball_measured_with_the_stylus_leaning_out(overhang: Path,
     assert planned.clearance.minimum >= 0.0
     text = get_dialect("dmis").generate(planned.program)
     assert f"SNSDEF/PROBE,INDEX,POL,{o.head[0]:g}," in text
-    check = check_points(text, part)
-    assert check.points and not check.off_model and not check.inward, check.text()
-
-    program, out = tmp_path / "overhang.dmi", tmp_path / "overhang.out"
-    program.write_text(text)
-    code = main(["sim", str(program), "--part", str(overhang), "--machine", str(CMM),
-                 "--offset", *map(str, OFFSET), "-o", str(out)])
-    assert code == 0
-    found = parse_dmis_output(out.read_text(), strict=True).feature(fid)
+    found = _run(text, part, overhang, tmp_path).feature(fid)
     axis = np.asarray(neck.axis)  # type: ignore[attr-defined]
     d = np.asarray(found.position) - (np.asarray(neck.origin)  # type: ignore[attr-defined]
                                       + np.asarray(OFFSET))
@@ -155,15 +160,7 @@ def test_tunnel_corner_blends_measured_with_the_head_leaning(tunnel: Path,
         assert heads[fid].head is not None and heads[fid].head[0] == 105.0, fid
     for fid in blends:
         assert heads[fid].head is not None and heads[fid].tilt > 3.75, fid
-    text = get_dialect("dmis").generate(planned.program)
-    check = check_points(text, part)
-    assert check.points and not check.off_model and not check.inward, check.text()
-    program, out = tmp_path / "tunnel.dmi", tmp_path / "tunnel.out"
-    program.write_text(text)
-    code = main(["sim", str(program), "--part", str(tunnel), "--machine", str(CMM),
-                 "--offset", *map(str, OFFSET), "-o", str(out)])
-    assert code == 0
-    output = parse_dmis_output(out.read_text(), strict=True)
+    output = _run(get_dialect("dmis").generate(planned.program), part, tunnel, tmp_path)
     for fid in roof + blends:
         f, found = features[fid], output.feature(fid)
         d = np.asarray(found.position) - (np.asarray(f.origin) + np.asarray(OFFSET))
