@@ -199,3 +199,42 @@ def test_unsure_paths_go_to_the_exact_check() -> None:
     bad = (path[0], ir.Move((0.0, 0.0, 40.0), ir.MoveMode.PROTECTED), *path[2:])
     assert not clear_paths([bad], near.obstacle, SETUP, MACHINE)[0]
     assert not _exact_clears(bad, near.obstacle)
+
+
+@settings(max_examples=examples(60), suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.floats(-60.0, 60.0), st.floats(-60.0, 60.0),
+                          st.floats(-5.0, 80.0)), min_size=2, max_size=12),
+       st.floats(0.0, 2.0))
+def test_the_body_query_skipped_only_where_it_cannot_be_the_least(
+        centres: list[tuple[float, float, float]], step: float) -> None:
+    """``MeshObstacle.clearance`` skips the body's distance query where the last one
+    proves it larger than the shank's: along any sequence of centres (each also nudged by
+    ``step``, as a sweep's next point), it gives exactly what an obstacle that forgot
+    its last queries (and so queries everything) gives."""
+    from probegen.planning.collision import Stylus
+
+    stylus = Stylus(1.5, 1.0, 20.0, 6.6, 65.0)
+    kept, fresh = _FAST_OBSTACLES
+    for x, y, z in centres:
+        for c in (np.array([x, y, z]), np.array([x + step, y, z - step])):
+            fresh._last.clear()
+            assert kept.clearance(c, stylus) == fresh.clearance(c, stylus)
+
+
+def test_the_body_query_is_skipped_where_the_body_is_far() -> None:
+    """The ball just above the part's top: the body (20 mm up) is far, the shank near;
+    a second point 0.1 mm on takes the body's distance from the first (not queried)."""
+    from probegen.planning.collision import Stylus
+
+    stylus = Stylus(1.5, 1.0, 20.0, 6.6, 65.0)
+    obstacle = MeshObstacle(PART.mesh(), None)
+    top = PART.bbox_max[2]
+    centre = np.array([(PART.bbox_min[0] + PART.bbox_max[0]) / 2.0,
+                       (PART.bbox_min[1] + PART.bbox_max[1]) / 2.0, top + 2.0])
+    obstacle.clearance(centre, stylus)
+    first = obstacle._last[stylus][1]
+    obstacle.clearance(centre + np.array([0.1, 0.0, 0.0]), stylus)
+    assert obstacle._last[stylus][1] is first
+
+
+_FAST_OBSTACLES = (MeshObstacle(PART.mesh(), None), MeshObstacle(PART.mesh(), None))

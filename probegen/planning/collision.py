@@ -187,6 +187,9 @@ class MeshObstacle:
         obstacle."""
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
+        self._last: dict[Stylus, list[tuple[np.ndarray, float]]] = {}
+        """Per stylus, where each of its cylinders' distances was last measured and that
+        distance (:meth:`clearance`)."""
         self.sweeps: dict[tuple[Any, ...], tuple[float, float, np.ndarray]] = {}
         """Sweep results by (start, end, uncertainties, stylus, required): the mesh is
         shared per model, so a move checked once (one feature alone, then the whole
@@ -234,13 +237,31 @@ class MeshObstacle:
         return self._objects[stylus]
 
     def clearance(self, centre: np.ndarray, stylus: Stylus) -> tuple[float, float]:
+        """The ball's clearance and the least of the shank's and the body's, mm.
+
+        The body's distance is not queried where the last one measured proves it cannot
+        be the least: a distance moves no more than the stylus does (1-Lipschitz), so
+        ``d_last - |centre - centre_last|`` bounds it from below, and where that bound
+        exceeds the shank's clearance by :data:`SKIP_SLACK` the result is the shank's,
+        the same value as with the query (a sweep's next points are near its last)."""
         ball, cylinders = self._stylus(stylus)
         ball.setTranslation(centre)
-        out = [self._to(ball)]
-        for obj, mid in cylinders:
+        b = self._to(ball)
+        last = self._last.get(stylus)
+        measured: list[tuple[np.ndarray, float]] = []
+        least = np.inf
+        for k, (obj, mid) in enumerate(cylinders):
+            if last is not None and k:
+                at, d = last[k]
+                if d - float(np.linalg.norm(centre - at)) >= least + SKIP_SLACK:
+                    measured.append(last[k])
+                    continue
             obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
-            out.append(self._to(obj))
-        return out[0], min(out[1:])
+            d = self._to(obj)
+            measured.append((np.array(centre, dtype=np.float64), d))
+            least = min(least, d)
+        self._last[stylus] = measured
+        return b, least
 
     def _to(self, obj: Any) -> float:
         """The distance from ``obj`` to the part less the mesh's tolerance, mm."""
@@ -379,6 +400,10 @@ class MeshObstacle:
         return f"face {int(self.face_ids[tri])}"
 
 
+SKIP_SLACK = 1e-3
+"""How far (mm) the lower bound of the body's distance must exceed the shank's clearance
+for :meth:`MeshObstacle.clearance` to skip the body's query: far above FCL's own
+tolerance, so the least of the two is the one the query would have given."""
 SLAB = 1e-3
 """Half thickness of the slab that stands for the parallelogram swept by the shank's
 axis (a flat convex is not a shape the distance query takes), mm."""
