@@ -140,9 +140,11 @@ def tunnel(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_tunnel_corner_blends_measured_with_the_head_leaning(tunnel: Path,
                                                              tmp_path: Path) -> None:
-    """The roof corners' octants (spheres, never planned along an axis) at A105 leaning
-    into the tunnel's mouth, the back wall's vertical blends under the roof leaning out of
-    it; measured on the virtual CMM to 1 µm (centre and diameter; axis and diameter)."""
+    """The back wall's vertical blends under the roof, leaning out of the tunnel, measured
+    on the virtual CMM to 1 µm (axis and diameter).  The roof corners' octants (spheres)
+    are reached only at A105, leaning up into the tunnel's mouth from below: that path
+    passes under the part's lowest point, where the part stands on the table
+    (``oriented.under_the_part``), so they are left out for a setup."""
     part = cad.load_part(tunnel)
     machine = load_profile(CMM)
     spec, notes = all_revolved_spec(part, machine)
@@ -152,16 +154,15 @@ def test_tunnel_corner_blends_measured_with_the_head_leaning(tunnel: Path,
     blends = sorted(k for k, f in features.items() if f.type == "cylinder"
                     and abs(f.axis[2]) > 0.99)
     assert len(roof) == 2 and len(blends) == 2
-    assert not notes, notes
+    assert sorted(n.split()[0] for n in notes) == roof, notes
     planned = plan_program(spec, runtime_variables=False, part=part)
     assert planned.clearance.minimum >= 0.0
     heads = {o.plan.spec.id: o.orientation for o in planned.oriented}
-    for fid in roof:
-        assert heads[fid].head is not None and heads[fid].head[0] == 105.0, fid
+    assert not set(roof) & set(heads)
     for fid in blends:
         assert heads[fid].head is not None and heads[fid].tilt > 3.75, fid
     output = _run(get_dialect("dmis").generate(planned.program), part, tunnel, tmp_path)
-    for fid in roof + blends:
+    for fid in blends:
         f, found = features[fid], output.feature(fid)
         d = np.asarray(found.position) - (np.asarray(f.origin) + np.asarray(OFFSET))
         if f.type == "cylinder":

@@ -263,8 +263,23 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
                                          view_of(index, exact, turned, clear))
                 except PlanningError:
                     continue
+                if under_the_part(plan, index, part):
+                    continue
                 return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
     return None
+
+
+def under_the_part(plan: RevolvedPlan, index: frames.Rotation, part: Part) -> bool:
+    """Whether a point of ``plan``'s path (in the frame of ``index``) lies below the part's
+    lowest point (work Z): the part stands on the table there, so a stylus leaning up
+    from below it (a countersink facing down reached at A105) would meet the table, which
+    the collision check does not model; such a feature is left to a setup."""
+    low = part.bbox_min[2] - TABLE_SLACK
+    return any(frames.apply(index, p.position)[2] < low for p in plan.plan.path)
+
+
+TABLE_SLACK = 1e-6
+"""Below the part's lowest point by more than this (mm) is under the table."""
 
 
 def _at_index(planner: Callable[[MachineProfile], RevolvedPlan], feature: RevolvedSpec,
