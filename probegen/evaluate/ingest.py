@@ -536,8 +536,7 @@ def _revolved(feature: RevolvedSpec, spec: Spec, oriented: Any, touches: Touches
     """
     plan, rotation = oriented.plan, oriented.orientation.rotation
     if turn is not None:
-        rotation = tuple(tuple(sum(turn[k][i] * rotation[k][j] for k in range(3))  # Rᵀ·O
-                               for j in range(3)) for i in range(3))
+        rotation = frames.product_t(turn, rotation)  # Rᵀ·O
     if oriented.stylus != spec.machine.stylus:
         calibration = None
     ball = oriented.stylus.ball_radius if calibration is None else calibration

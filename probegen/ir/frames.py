@@ -92,6 +92,13 @@ def apply_t(rotation: Rotation, v: ir.Vec3) -> ir.Vec3:
                  for i in range(3))
 
 
+def product_t(a: Rotation, b: Rotation) -> Rotation:
+    """``aᵀ·b``: the rotation ``b`` seen from the frame of ``a`` (frame ``b`` in ``a``'s
+    coordinates)."""
+    return tuple(tuple(sum(a[k][i] * b[k][j] for k in range(3))  # type: ignore[return-value]
+                       for j in range(3)) for i in range(3))
+
+
 def to_work(orient: ir.Orient | None, p: ir.Vec3) -> ir.Vec3:
     """Point ``p`` of ``orient``'s frame in work coordinates (``None``: unchanged)."""
     if orient is None:

@@ -62,7 +62,7 @@ from probegen.planning.revolved_plan import (
     unrouted,
 )
 from probegen.planning.styli import profile_with, rack_order, stylus_named
-from probegen.planning.tilted import MOST_PLANS, TRIED, product_t, screen, touches_in_work, view_of
+from probegen.planning.tilted import MOST_PLANS, TRIED, screen, touches_in_work, view_of
 from probegen.planning.well_posed import free_fit
 from probegen.spec.model import RevolvedSpec
 
@@ -225,8 +225,9 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
     index that leans the stylus off the axis (:mod:`probegen.planning.tilted`): out of
     each end :func:`approaches` gives, with each stylus of the rack (largest first, or
     the one the spec forces), the best :data:`~probegen.planning.tilted.TRIED` indices
-    :func:`~probegen.planning.tilted.screen` finds, until one plans; None when none does
-    (a sphere, a machine without a head, a feature with a work-offset action)."""
+    :func:`~probegen.planning.tilted.screen` finds, until one plans (and keeps its path
+    above the part's lowest point, :func:`under_the_part`); None when none does, on a
+    machine without a head, or for a feature with a work-offset or align action."""
     head = machine.head
     if head is None or feature.actions.work_offset is not None or (
             feature.actions.align is not None):
@@ -324,7 +325,7 @@ def at_index(plan: RevolvedPlan, o: Orientation, clearance_z: float) -> Revolved
         PlanningError: a point of the plan lies above the index frame's clearance level.
     """
     assert o.exact is not None
-    turn = ir.Orient("EXACT", product_t(o.rotation, o.exact))
+    turn = ir.Orient("EXACT", frames.product_t(o.rotation, o.exact))
     axis = frames.direction_to_work(turn, (0.0, 0.0, 1.0))
 
     def moved(p: PathPoint) -> PathPoint:

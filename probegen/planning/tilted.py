@@ -72,13 +72,7 @@ def view_of(index: frames.Rotation, exact: frames.Rotation, part: Part,
             clearance_z: float) -> View:
     """The view of a plan made in frame ``exact`` probed at frame ``index`` on the part
     turned into it (``part``) with its clearance level ``clearance_z``."""
-    return View(ir.Orient("EXACT", product_t(index, exact)), part, clearance_z)
-
-
-def product_t(a: frames.Rotation, b: frames.Rotation) -> frames.Rotation:
-    """``aᵀ·b``."""
-    return tuple(tuple(sum(a[k][i] * b[k][j] for k in range(3))  # type: ignore[return-value]
-                       for j in range(3)) for i in range(3))
+    return View(ir.Orient("EXACT", frames.product_t(index, exact)), part, clearance_z)
 
 
 def express(plan: FeaturePlan, view: View) -> FeaturePlan:
