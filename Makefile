@@ -29,8 +29,10 @@ demo: $(STAMP)
 	@echo "machine log: out/run.log; results: out/results.json, out/results.csv, out/probe-calibration.toml"
 	@echo "report: out/report.html"
 
+# JOBS: pytest-xdist workers (auto: one per core); each test file runs whole on one worker.
+JOBS ?= auto
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(JOBS) --dist loadfile
 	$(BIN)/lint-imports
 	$(BIN)/ruff check probegen tests benchmarks samples
 	$(BIN)/mypy probegen

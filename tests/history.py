@@ -22,6 +22,8 @@ import tempfile
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -37,6 +39,9 @@ from probegen.sim.contact import PlacedPart
 from probegen.sim.form import FormError
 from probegen.sim.vm import VirtualMachine, run_text
 from probegen.spec.model import Spec, load_spec
+
+if TYPE_CHECKING:
+    from sqlalchemy.engine import URL
 
 SPEC = REPO / "samples/bore_block/bore_block.toml"
 RUNS = 30
@@ -126,17 +131,41 @@ def postgres_url() -> str:
     target = sa.engine.make_url(url)
     if "+" not in target.drivername:
         target = target.set(drivername="postgresql+psycopg")
-    engine = sa.create_engine(target, connect_args={"connect_timeout": 5})
     try:
-        with engine.begin() as conn:
-            for table in ("characteristics", "runs", "probegen_version"):
-                conn.execute(sa.text(f"DROP TABLE IF EXISTS {table} CASCADE"))
+        target = _worker_database(sa, target)
+        engine = sa.create_engine(target, connect_args={"connect_timeout": 5})
+        try:
+            with engine.begin() as conn:
+                for table in ("characteristics", "runs", "probegen_version"):
+                    conn.execute(sa.text(f"DROP TABLE IF EXISTS {table} CASCADE"))
+        finally:
+            engine.dispose()
     except sa.exc.OperationalError as exc:
         pytest.skip(f"PostgreSQL half skipped: {PG_ENV} names a server that does not "
                     f"answer ({str(exc.orig).splitlines()[0]})")
+    return sa.engine.make_url(url).set(database=target.database).render_as_string(
+        hide_password=False)
+
+
+def _worker_database(sa: ModuleType, target: URL) -> URL:
+    """``target`` itself, or under pytest-xdist the worker's own database beside it
+    (``probegen_test_gw0``, made on first use: the role needs CREATEDB, as
+    ``.ci/postgres`` grants), so that two workers never drop each other's tables."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    if not worker:
+        return target
+    name = f"{target.database}_{worker}"
+    engine = sa.create_engine(target, isolation_level="AUTOCOMMIT",
+                              connect_args={"connect_timeout": 5})
+    try:
+        with engine.connect() as conn:
+            known = conn.execute(sa.text("SELECT 1 FROM pg_database WHERE datname = :n"),
+                                 {"n": name}).first()
+            if known is None:
+                conn.execute(sa.text(f'CREATE DATABASE "{name}"'))
     finally:
         engine.dispose()
-    return url
+    return target.set(database=name)
 
 
 BACKENDS = ("sqlite", "postgresql")
