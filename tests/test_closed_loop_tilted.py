@@ -41,7 +41,10 @@ PROFILES = {"fanuc": "samples/machines/vmc-5axis-fanuc.toml",
 
 @pytest.fixture(scope="module")
 def part() -> cad.Part:
-    return cad.load_part(PART)
+    """The block held 25 mm above the table (a fixture, as a five-face part is): the
+    five-axis sample's OMP40 body (40 mm across) along a side bore 20 mm up clears the
+    table then (on the table it would reach into it: tests/test_orient.py)."""
+    return cad.load_part(PART, raised=25.0)
 
 
 def _plan(part: cad.Part, dialect: str) -> tuple[object, object, str]:

@@ -111,8 +111,10 @@ def test_plan_all_revolved_writes_the_programs(tmp_path: Path,
     model = SHARED / "ref/nist-step/nist_ftc_11_asme1_rb.stp"
     if not model.exists():
         pytest.skip("no NIST FTC 11")
+    # the 1.5 mm plate on parallels 10 mm high (on the table its bore and boss would be
+    # left out: the ball would reach into it; tests/test_nist_revolved.py)
     code = main(["-q", "plan", "--all-revolved", str(model), "--machine", str(MACHINE),
-                 "-d", "fanuc", "-d", "dmis", "-o", str(tmp_path)])
+                 "--raised", "10", "-d", "fanuc", "-d", "dmis", "-o", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == ExitCode.OK
     assert out.startswith("feature  kind")  # the comparison table is kept
@@ -120,6 +122,8 @@ def test_plan_all_revolved_writes_the_programs(tmp_path: Path,
         assert f"wrote {tmp_path / model.stem}.{ext}" in out
     total = re.search(r"^total +\d+ +(\d+) ", out, re.M)
     assert total is not None and int(total[1]) == 40  # FTC 11: 3 features, 40 touches
+    written = (tmp_path / f"{model.stem}_all_revolved.toml").read_text()
+    assert "\nraised = 10.0   # mm above the machine table\n" in written
     _runs_without_alarm(model, tmp_path / f"{model.stem}.nc", "macrob", 40)
     _runs_without_alarm(model, tmp_path / f"{model.stem}.dmi", "dmis", 40)
 

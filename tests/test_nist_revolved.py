@@ -35,24 +35,31 @@ def _need(path: Path) -> Path:
     return path
 
 
-@pytest.mark.parametrize(("model", "planned", "unsafe"), [
-    (NIST / "nist_ftc_11_asme1_rb.stp", 3, 0),
-    (NIST / "nist_ctc_03_asme1_rc.stp", 20, 0),
+@pytest.mark.parametrize(("model", "raised", "planned", "unsafe"), [
+    # the 1.5 mm plate on parallels 10 mm high: its bore and boss measured through the
+    # whole thickness; lying on the table, every touch of the ball (D6) at their
+    # sections (z = -0.75) would reach into it: both left out, the table named
+    (NIST / "nist_ftc_11_asme1_rb.stp", 10.0, 3, 0),
+    (NIST / "nist_ftc_11_asme1_rb.stp", 0.0, 1, 2),
+    # the sheet-metal part (3.2 mm sheet) on parallels; on the table its ten holes in the
+    # sheet would be left out as FTC 11's
+    (NIST / "nist_ctc_03_asme1_rc.stp", 10.0, 20, 0),
     # 33 before: +2 short arcs tried with the margin alone at their ends, -4 tori of two
-    # tube positions refused (below); 6 unsafe: the three rounded edges under the 122
-    # face, and three tori whose every touch the OMP40-like body of vmc-fanuc.toml would
+    # tube positions refused (below); 7 unsafe: the three rounded edges under the 122
+    # face, three tori whose every touch the OMP40-like body of vmc-fanuc.toml would
     # take into a wall (before the body was stated they were reached in two tube
-    # positions, too few for ingest)
-    (DCX, 31, 6),
+    # positions, too few for ingest), and the torus R41 at the foot of the part (its
+    # lowest touches 1.6 mm above the table; the ball would reach into it)
+    (DCX, 0.0, 31, 7),
 ])
-def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
+def test_all_revolved_runs_on_the_virtual_machine(model: Path, raised: float, planned: int,
                                                   unsafe: int) -> None:
     """Every feature that can be made safe is planned (rerouted where the collision
-    check asks); the ones that cannot are reported with the move and the face (DCX: the
-    three rounded edges under the 122 face, their tube facing away from a vertical
-    probe); the whole program clears and runs on the virtual machine."""
+    check asks); the ones that cannot are reported with the move and the face or the
+    table (DCX: the three rounded edges under the 122 face, their tube facing away from
+    a vertical probe); the whole program clears and runs on the virtual machine."""
     machine = load_profile(MACHINE)
-    part = cad.load_part(_need(model))
+    part = cad.load_part(_need(model), raised=raised)
     spec, notes = all_revolved_spec(part, machine)
     result = plan_program(spec, runtime_variables=True, part=part)
     assert len(result.revolved) == planned
@@ -61,12 +68,14 @@ def test_all_revolved_runs_on_the_virtual_machine(model: Path, planned: int,
     left = [n for n in notes if "no touch can be reached safely" in n]
     assert len(left) == unsafe
     assert all(re.search(r"approach from \(.+\) to \(.+\): the (stylus ball|stylus shank|"
-                         r"probe body) .+ face \d+", n) for n in left)
-    # DCX: a torus (R41) whose third tube position the 6 mm ball cannot reach; ingest would
-    # leave it NOT EVALUATED (a torus needs three), so it is not written
-    few = [n.split()[0] for n in notes if "too few touches to evaluate it: 16 touches in 2 "
-           "sections (at least 8 needed, in 3 sections)" in n]
-    assert few == (["R41"] if model == DCX else [])
+                         r"probe body) .+ (face \d+|the table)", n) for n in left)
+    tabled = {n.split()[0] for n in left if "into the table" in n}
+    assert len(tabled) == (2 if raised == 0.0 and model != DCX else int(model == DCX))
+    if raised == 0.0 and model != DCX:  # the reason says what to do
+        assert all("): no room above the table: the stylus ball reaches 2.251 mm into the "
+                   "table the part stands on (state how far it is raised: [part] raised, "
+                   "--raised; or a smaller stylus)" in n for n in left), left
+    assert not [n for n in notes if "too few touches to evaluate it" in n]
     touches = sum(len(p.normals) for p in result.revolved)
     text = get_dialect("fanuc").generate(result.program)
     vm = VirtualMachine(PlacedPart.from_model(cad.load_step(model)),

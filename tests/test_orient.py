@@ -6,6 +6,7 @@ inclined hole at 45 deg)."""
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
@@ -62,9 +63,12 @@ def model(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def profile(kind: str) -> MachineProfile:
-    """The VMC sample with a CMM head (DMIS) or a five-axis tilt (Fanuc), the rack, and a
-    CMM-like margin of 0.1 mm."""
+    """The VMC sample with a CMM head (DMIS) or a five-axis tilt (Fanuc), the rack, a
+    CMM-like margin of 0.1 mm and a TP20-like probe body (13.2 x 65 mm): the sample's
+    OMP40 (40 mm across) standing along a side bore's axis would reach 20 mm below it,
+    into the table the block stands on (the side bores are 20 mm above it)."""
     base = load_profile(REPO / "samples/machines/vmc-fanuc.toml")
+    base = replace(base, probe=replace(base.probe, body_diameter=13.2, body_length=65.0))
     if kind == "head":
         return replace(base, dialect="dmis", head=Head(), rack=RACK, margin=0.1)
     return replace(base, tilt=Tilt(), rack=RACK, margin=0.1)
@@ -565,9 +569,21 @@ def test_all_revolved_runs_on_the_virtual_machine_with_its_route(
     program.write_text(text, encoding="ascii")
     assert main(["sim", str(program), "--part", str(model), "--machine",
                  str(REPO / profile_path), "-o", str(log)]) == 0
-    touches = sum(isinstance(n, ir.Touch) for n in ir.walk(p.program.body))
-    assert touches == len(spec.features) * 16
-    assert f"({touches} touches)" in capsys.readouterr().err
+    touches = Counter(n.feature for n in ir.walk(p.program.body) if isinstance(n, ir.Touch))
+    side = {r.spec.id for r in p.revolved if r.spec.face in (FACES["-Y"], FACES["+X"])}
+    if dialect == "dmis":
+        assert set(touches.values()) == {16}
+    else:
+        # the five-axis sample's OMP40 body (40 mm across) along a side bore's axis, 20 mm
+        # above the table the block stands on: the touches that take it lower are dropped
+        # (10 of 16), the table named; the other bores whole
+        assert {f: touches[f] for f in side} == dict.fromkeys(side, 6)
+        assert all(touches[f.id] == 16 for f in spec.features if f.id not in side)
+        for r in p.revolved:
+            assert any("probe body cuts" in n and "into the table" in n
+                       for n in r.notes) == (r.spec.id in side), r.notes
+    assert len(touches) == len(spec.features)
+    assert f"({sum(touches.values())} touches)" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("axis", [(1.0, 0.0, 0.0), (0.6, 0.0, 0.8), (0.0, 0.94, -0.34),

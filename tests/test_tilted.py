@@ -143,8 +143,8 @@ def test_tunnel_corner_blends_measured_with_the_head_leaning(tunnel: Path,
     """The back wall's vertical blends under the roof, leaning out of the tunnel, measured
     on the virtual CMM to 1 µm (axis and diameter).  The roof corners' octants (spheres)
     are reached only at A105, leaning up into the tunnel's mouth from below: that path
-    passes under the part's lowest point, where the part stands on the table
-    (``oriented.under_the_part``), so they are left out for a setup."""
+    passes under the part's lowest point, into the table the part stands on (the
+    collision check's table, planning/table.py), so they are left out for a setup."""
     part = cad.load_part(tunnel)
     machine = load_profile(CMM)
     spec, notes = all_revolved_spec(part, machine)

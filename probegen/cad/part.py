@@ -91,6 +91,10 @@ class Part:
     model: Model
     _memo: dict[Hashable, Any] = field(default_factory=dict, init=False, repr=False)
     _turn: tuple[Part, Rotation] | None = field(default=None, repr=False)
+    raised: float = 0.0
+    """How far the part's lowest point stands above the machine table (a fixture,
+    parallels), mm: the collision check keeps every stylus off the table that far below
+    it (:mod:`probegen.planning.table`); 0: the part stands on the table."""
 
     @property
     def path(self) -> str:
@@ -159,7 +163,7 @@ class Part:
         key = ("turned", tuple(round(x, TURN_KEY_DECIMALS) + 0.0
                                for row in rotation for x in row))
         return base.memo(key, lambda: Part(_turned_model(base.model, rotation),
-                                           _turn=(base, rotation)))
+                                           _turn=(base, rotation), raised=base.raised))
 
     def recent(self, kind: str) -> Recent:
         """The :class:`Recent` values of ``kind`` of the part as loaded and of all its
@@ -224,8 +228,9 @@ def _turned_mesh(mesh: trimesh.Trimesh, rotation: Rotation) -> trimesh.Trimesh:
     return turned
 
 
-def load_part(path: str | os.PathLike[str]) -> Part:
-    """Read the STEP file ``path`` into a :class:`Part` (:func:`probegen.cad.load_step`).
+def load_part(path: str | os.PathLike[str], raised: float = 0.0) -> Part:
+    """Read the STEP file ``path`` into a :class:`Part` (:func:`probegen.cad.load_step`),
+    its lowest point ``raised`` mm above the machine table (:attr:`Part.raised`).
 
     Load it once, at the top (the command, or a public entry given a spec), and hand the
     part down.
@@ -233,4 +238,4 @@ def load_part(path: str | os.PathLike[str]) -> Part:
     Raises:
         ModelError: the file is missing, not STEP, corrupt or holds no faces.
     """
-    return Part(load_step(path))
+    return Part(load_step(path), raised=raised)

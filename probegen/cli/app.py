@@ -163,7 +163,7 @@ def _sim_part(args: argparse.Namespace) -> tuple[Any, Any]:
 
         spec = load_spec(args.spec)
         if args.part or spec.model is not None:
-            return cad.load_part(args.part or str(spec.model)), spec.machine
+            return cad.load_part(args.part or str(spec.model), raised=spec.raised), spec.machine
         spheres = [f for f in spec.features if isinstance(f, SphereTest) and f.centre]
         centres = [f.centre for f in spheres]
         radii = [(f.diameter or 0.0) / 2.0 for f in spheres]
@@ -300,6 +300,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="plan every accessible revolved feature of the model (default "
                          "sections, 8 points)")
     pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
+    pl.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
+                    help="with --all-revolved: how far the part's lowest point stands above "
+                         "the machine table (a fixture, parallels), mm: the collision check "
+                         "keeps every stylus off the table that far below it (default 0: "
+                         "on the table)")
     pl.add_argument("-d", "--dialect", action="append",
                     help="with -o: dialect of a program to write (repeatable; default: the "
                          f"spec's or the profile's): {dialect_help()}")

@@ -15,6 +15,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from probegen.cli.options import non_negative
 from probegen.errors import ExitCode
 from probegen.files import write_file
 
@@ -28,9 +29,9 @@ def _init(args: argparse.Namespace) -> int:
     if target.exists():  # before the planning, which takes a while on a large model
         write_file(target, "", "the spec skeleton", new=True)
     machine = load_profile(args.machine)
-    part = load_part(args.model)
+    part = load_part(args.model, raised=args.raised)
     found = skeleton(part, machine)
-    text = skeleton_text(found, machine, target, args.model, args.machine)
+    text = skeleton_text(found, machine, target, args.model, args.machine, args.raised)
     write_file(target, text, "the spec skeleton", new=True)
     kinds = _counts(found)
     print(f"wrote {target}: {len(found.features)} features ({kinds}), "
@@ -54,12 +55,14 @@ def _relative(path: str, folder: Path) -> str:
     return Path(os.path.relpath(Path(path).resolve(), folder.resolve())).as_posix()
 
 
-def spec_head(model: str, profile: str, folder: Path) -> list[str]:
+def spec_head(model: str, profile: str, folder: Path, raised: float = 0.0) -> list[str]:
     """The ``[part]`` table and the start of ``[machine]`` (its ``profile``) of a spec
     written into ``folder``: ``model`` and ``profile`` as given on the command line,
-    written relative to it.  ``init``'s skeleton and ``plan --all-revolved -o``'s spec."""
+    written relative to it, ``raised`` where not 0.  ``init``'s skeleton and ``plan
+    --all-revolved -o``'s spec."""
+    lift = [f"raised = {raised!r}   # mm above the machine table"] if raised else []
     return ["[part]", f"model = {toml_string(_relative(model, folder))}", 'units = "mm"',
-            "", "[machine]", f"profile = {toml_string(_relative(profile, folder))}"]
+            *lift, "", "[machine]", f"profile = {toml_string(_relative(profile, folder))}"]
 
 
 def program_name(stem: str) -> str:
@@ -68,7 +71,8 @@ def program_name(stem: str) -> str:
     return name or "PROBEGEN"
 
 
-def skeleton_text(found: Any, machine: Any, target: Path, model: str, profile: str) -> str:
+def skeleton_text(found: Any, machine: Any, target: Path, model: str, profile: str,
+                  raised: float = 0.0) -> str:
     """The TOML text of a skeleton (:class:`probegen.planning.skeleton.Skeleton`) for the
     spec file ``target``; ``model`` and ``profile`` as given on the command line."""
     folder = target.parent
@@ -82,7 +86,7 @@ def skeleton_text(found: Any, machine: Any, target: Path, model: str, profile: s
         "# out are listed at the end with the reason (docs/init.md).",
         f"# {len(found.features)} features ({_counts(found)}), {len(found.left_out)} left out.",
         "",
-        *spec_head(model, profile, folder),
+        *spec_head(model, profile, folder, raised),
         f"clearance_z = {found.clearance_z:.3f}   # at least 10 mm above the model "
         f"(the profile's: {machine.clearance_z:.3f})",
         "",
@@ -140,4 +144,8 @@ def add_init_command(sub: Any) -> None:
     i.add_argument("-o", "--output",
                    help="the spec file to write (default: <model>.toml here; never "
                         "overwritten)")
+    i.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
+                   help="how far the part's lowest point stands above the machine table (a "
+                        "fixture, parallels), mm: the collision check keeps every stylus "
+                        "off the table that far below it (default 0: on the table)")
     i.set_defaults(func=_init)

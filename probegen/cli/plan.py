@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import sys
@@ -273,8 +274,9 @@ def _plan(args: argparse.Namespace) -> int:
         # the features every program of -d can evaluate (well_posed.strictest)
         loaded = load_profile(args.machine)
         machine = with_dialect(loaded, strictest(args.dialect or (), loaded.dialect))
-        part = load_part(args.input)
+        part = load_part(args.input, raised=args.raised)
         spec, notes = all_revolved_setups(part, machine)
+        spec = dataclasses.replace(spec, raised=args.raised)
     else:
         spec = load_spec(args.input)
         part = part_of(spec)
@@ -409,7 +411,7 @@ def all_revolved_spec_text(spec: Any, target: Path, model: str, profile: str) ->
         "# logs or DMIS outputs (one per setup program). Tolerances may be added; any other",
         "# change plans other programs, whose logs these are not.",
         "",
-        *spec_head(model, profile, folder),
+        *spec_head(model, profile, folder, spec.raised),
         f"clearance_z = {spec.clearance_z!r}",
         "",
         "[program]",

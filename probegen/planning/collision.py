@@ -52,6 +52,8 @@ from probegen.planning.orient import (
     to_work,
     top_of,
 )
+from probegen.planning.table import NAME as TABLE
+from probegen.planning.table import Table
 
 if TYPE_CHECKING:
     from probegen.cad import Part, Recent
@@ -200,6 +202,10 @@ class MeshObstacle:
         stylus) (:func:`describe`: a move refused again is not measured again)."""
         self.floor = -MESH_TOLERANCE
         """The least clearance ``clearance`` reports (the part overlaps the stylus)."""
+        self.table: Table | None = None if part is None else Table.under(
+            mesh.vertices, part.rotation, part.raised)
+        """The machine table under the part (:mod:`probegen.planning.table`), with a
+        part: every clearance is the least of the part's and the table's."""
 
     @property
     def part(self) -> Any:
@@ -247,6 +253,9 @@ class MeshObstacle:
         ball, cylinders = self._stylus(stylus)
         ball.setTranslation(centre)
         b = self._to(ball)
+        table = self.table
+        if table is not None:
+            b = min(b, table.clearance(centre, stylus.ball))
         last = self._last.get(stylus)
         measured: list[tuple[np.ndarray, float]] = []
         least = np.inf
@@ -258,6 +267,9 @@ class MeshObstacle:
                     continue
             obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
             d = self._to(obj)
+            if table is not None:
+                radius, low, high = stylus.cylinders()[k]
+                d = min(d, table.clearance(centre, radius, low, high))
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured
@@ -291,8 +303,14 @@ class MeshObstacle:
         rot = np.asarray(rotation_to_z(move / length)).T  # takes +Z onto the move
         ball = self._distance(fcl.Capsule(stylus.ball, length),
                               fcl.Transform(rot, (a + b) / 2.0))
-        return ball, min(self._swept_cylinder(a, b, radius, low, high)
-                         for radius, low, high in stylus.cylinders())
+        shank = min(self._swept_cylinder(a, b, radius, low, high)
+                    for radius, low, high in stylus.cylinders())
+        table = self.table
+        if table is not None:
+            ball = min(ball, table.swept(a, b, stylus.ball))
+            shank = min([shank] + [table.swept(a, b, radius, low, high)
+                                   for radius, low, high in stylus.cylinders()])
+        return ball, shank
 
     def _swept_cylinder(self, a: np.ndarray, b: np.ndarray, radius: float, low: float,
                         high: float) -> float:
@@ -352,6 +370,8 @@ class MeshObstacle:
         cylinder shortened from below of the search keeps: one inside test per place
         (memoised)."""
         fcl = self.fcl
+        if self._table_clearance(centre, e) < 0.0:
+            return True
         if fcl.collide(self._shape(centre, e), self.part, fcl.CollisionRequest(),
                        fcl.CollisionResult()):
             return True
@@ -361,14 +381,25 @@ class MeshObstacle:
         return self.inside(centre + np.array([0.0, 0.0, top]))
 
     def beneath(self, point: np.ndarray) -> float:
-        """How far ``point`` (in the material) lies from the part's surface, mm."""
+        """How far ``point`` (in the material: the part's or the table's) lies from the
+        surface, mm."""
         fcl = self.fcl
-        return self._distance(fcl.Sphere(1e-6), fcl.Transform(point)) + MESH_TOLERANCE
+        below = -np.inf if self.table is None else self.table.depth(point)
+        if below > 0.0 and not self.inside(point):
+            return below
+        return max(below, self._distance(fcl.Sphere(1e-6), fcl.Transform(point))
+                   + MESH_TOLERANCE)
+
+    def _table_clearance(self, centre: np.ndarray, e: Element) -> float:
+        """Element ``e``'s clearance from the table (infinite without one), mm."""
+        if self.table is None:
+            return np.inf
+        return self.table.clearance(centre, e.radius, e.low, e.high)
 
     def clearance_of(self, centre: np.ndarray, e: Element) -> float:
         """The distance from element ``e`` (ball's centre at ``centre``) to the part less
-        the mesh's tolerance, mm."""
-        return self._to(self._shape(centre, e))
+        the mesh's tolerance, or to the table where that is less, mm."""
+        return min(self._to(self._shape(centre, e)), self._table_clearance(centre, e))
 
     def face_of(self, centre: np.ndarray, e: Element) -> str:
         """The face (or triangle) element ``e`` meets deepest with the ball's centre at
@@ -379,12 +410,17 @@ class MeshObstacle:
         fcl.collide(self.part, obj, fcl.CollisionRequest(num_max_contacts=16,
                                                          enable_contact=True), hit)
         tris = [(c.penetration_depth, max(int(c.b1), int(c.b2))) for c in hit.contacts]
+        table = self._table_clearance(centre, e)
         if tris:
+            if -table > max(tris)[0]:
+                return TABLE
             tri = max(tris)[1]
         else:
             near = fcl.DistanceResult()
             fcl.distance(self.part, obj, fcl.DistanceRequest(enable_nearest_points=True),
                          near)
+            if table < near.min_distance:
+                return TABLE
             tri = int(near.b1)
         return f"triangle {tri}" if self.face_ids is None else f"face {int(self.face_ids[tri])}"
 
@@ -394,6 +430,8 @@ class MeshObstacle:
         probe = fcl.CollisionObject(fcl.Sphere(1e-6), fcl.Transform(point))
         result = fcl.DistanceResult()
         fcl.distance(self.part, probe, fcl.DistanceRequest(enable_nearest_points=True), result)
+        if self.table is not None and -self.table.depth(point) < result.min_distance:
+            return TABLE
         tri = int(result.b1)
         if self.face_ids is None:
             return f"triangle {tri}"

@@ -28,7 +28,9 @@ Per segment, in order of cost:
    slanted segment it lies inside a vertical cylinder around the segment's midpoint,
    ``|Δxy|/2`` wider; grown by ``q`` in radius and at both ends; the body likewise.
 3. A segment start not known to be outside the part (an end of a cleared segment, or
-   above every triangle of its cell) makes the path unsure.
+   above every triangle of its cell) makes the path unsure; so does a segment whose
+   ball, shank or body comes within ``q`` of the table under the part
+   (:mod:`probegen.planning.table`, exact).
 
 A cleared segment goes into the obstacle's sweep cache (the exact check's key, with the
 proven lower bounds ``clear + FCL_SLACK`` as its clearances), so the check of the whole
@@ -326,6 +328,13 @@ def clear_segments(segments: Sequence[Sequence[Segment] | None], obstacle: Obsta
     for radius, bottom, _ in stylus.cylinders()[1:]:
         body &= hmap.highest_along(a, b, radius + q) <= low + bottom - q
     above = hmap.highest_along(a, a, 0.0) < a[:, 2]
+    table = obstacle.table
+    off_table = np.ones(len(flat), dtype=bool)  # the table (exact) clears by q too
+    if table is not None:
+        elements: list[tuple[float, float | None, float | None]] = [(r, None, None)]
+        elements += list(stylus.cylinders())
+        off_table[:] = [min(table.swept(a[i], b[i], radius, lo, hi)
+                            for radius, lo, hi in elements) >= q for i in range(len(flat))]
     swept = _Swept(obstacle, stylus, q)
     ok = np.ones(len(segments), dtype=bool)
     ok[[k for k, segs in enumerate(segments) if not segs]] = False
@@ -337,7 +346,7 @@ def clear_segments(segments: Sequence[Sequence[Segment] | None], obstacle: Obsta
             continue
         # a start inside the part: the exact check refuses; ends of cleared segments are
         # outside (a cleared sweep never meets the surface)
-        if first[i] and not above[i]:
+        if (first[i] and not above[i]) or not off_table[i]:
             ok[k] = False
         elif not both[i]:
             ok[k] = swept.ball(a[i], b[i]) and (bool(shank[i]) or swept.shank(a[i], b[i]))

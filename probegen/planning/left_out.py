@@ -28,6 +28,8 @@ _SMALL = re.compile(r"inner radius ([\d.]+) mm: the safe circle R - r - d = [-\d
                     r"expected R > r \+ d")
 _HIT = re.compile(r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) mm)?"
                   r"[^;]*?(?:into|of) face (\d+)")
+_TABLE = re.compile(r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) "
+                    r"mm)?[^;]*?(?:into|of) the table")
 _TILTED = re.compile(r"at the nearest head index \w+ the stylus stands [\d.]+ deg off the "
                      r"feature's axis")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
@@ -118,6 +120,12 @@ def _planning_reason(f: Any, part: Part, machine: MachineProfile, problem: str,
             return (f"blind, depth {depth:.3f} mm: the ball reaches no section (it needs "
                     f"{r + m:.3f} mm below one: radius {r:.3f} + margin {m:.3f}): a smaller "
                     f"stylus [{_detail(problem)}]")
+        table = _TABLE.search(problem)
+        if table is not None and _HIT.search(problem) is None:
+            deep = f" {table[2]} mm" if table[2] else ""
+            return (f"no room above the table: the {table[1]} reaches{deep} into the table "
+                    "the part stands on (state how far it is raised: [part] raised, "
+                    f"--raised; or a smaller stylus) [{_detail(problem)}]")
         climbs = [float(b) > float(a) for a, b in _CLIMB.findall(problem)]
         if climbs and all(climbs):
             return ("faces down: every touch goes up, under material: needs an orientation "

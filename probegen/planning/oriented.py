@@ -225,8 +225,9 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
     index that leans the stylus off the axis (:mod:`probegen.planning.tilted`): out of
     each end :func:`approaches` gives, with each stylus of the rack (largest first, or
     the one the spec forces), the best :data:`~probegen.planning.tilted.TRIED` indices
-    :func:`~probegen.planning.tilted.screen` finds, until one plans (and keeps its path
-    above the part's lowest point, :func:`under_the_part`); None when none does, on a
+    :func:`~probegen.planning.tilted.screen` finds, until one plans (its path checked
+    against the part and the table under it, :mod:`probegen.planning.table`: a
+    countersink facing down is not reached from below the part); None when none does, on a
     machine without a head, or for a feature with a work-offset or align action."""
     head = machine.head
     if head is None or feature.actions.work_offset is not None or (
@@ -264,23 +265,8 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
                                          view_of(index, exact, turned, clear))
                 except PlanningError:
                     continue
-                if under_the_part(plan, index, part):
-                    continue
                 return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
     return None
-
-
-def under_the_part(plan: RevolvedPlan, index: frames.Rotation, part: Part) -> bool:
-    """Whether a point of ``plan``'s path (in the frame of ``index``) lies below the part's
-    lowest point (work Z): the part stands on the table there, so a stylus leaning up
-    from below it (a countersink facing down reached at A105) would meet the table, which
-    the collision check does not model; such a feature is left to a setup."""
-    low = part.bbox_min[2] - TABLE_SLACK
-    return any(frames.apply(index, p.position)[2] < low for p in plan.plan.path)
-
-
-TABLE_SLACK = 1e-6
-"""Below the part's lowest point by more than this (mm) is under the table."""
 
 
 def _at_index(planner: Callable[[MachineProfile], RevolvedPlan], feature: RevolvedSpec,

@@ -30,7 +30,7 @@ def part_of(spec: Spec) -> Part | None:
         return None
     from probegen.cad import load_part  # lazily: only planning from a model needs OCP
 
-    return load_part(spec.model)
+    return load_part(spec.model, raised=spec.raised)
 
 
 def make_setup(spec: Spec) -> ir.Setup:

@@ -136,7 +136,7 @@ def table_part(part: Part | None, setup: NamedSetup | None) -> Part | None:
 
     turned = part.turned(transpose(setup.rotation))
     return part.original.memo(("setup", setup.name, setup.rotation),
-                              lambda: Whole(turned.model))
+                              lambda: Whole(turned.model, raised=part.raised))
 
 
 F = TypeVar("F", bound=Feature)

@@ -7,6 +7,8 @@ Schema (lengths in ``[part] units``, converted to mm on load; see ``docs/spec.md
     units = "mm"                   # their geometry explicitly ("mm" | "inch")
     number = "4711-020-A"          # optional: the part number (results, QIF, report, store)
     name = "Bearing block"         # optional: the part's name
+    raised = 0.0                   # optional: its lowest point above the machine table
+                                   # (a fixture, parallels), mm; 0: on the table
 
     [machine]
     profile = "../machines/vmc-fanuc.toml"   # relative to this file
@@ -303,6 +305,8 @@ class Spec:
             decision_rule``): ``simple`` acceptance or ``guard_band``.
         part_number: the part number (``[part] number``), or None.
         part_name: the part's name (``[part] name``), or None.
+        raised: how far the part's lowest point stands above the machine table
+            (``[part] raised``, mm; :attr:`probegen.cad.Part.raised`).
     """
 
     source: str
@@ -316,6 +320,7 @@ class Spec:
     decision_rule: str = "simple"
     part_number: str | None = None
     part_name: str | None = None
+    raised: float = 0.0
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -328,6 +333,7 @@ def load_spec(path: str | Path) -> Spec:
     k = MM_PER_INCH if units == "inch" else 1.0
     model_name = part.get_str("model")
     number, name = _label(part, "number", 40), _label(part, "name", 80)
+    raised = k * (part.get_float("raised", 0.0, minimum=0.0) or 0.0)
     part.done()
     m = root.table("machine", required=True)
     machine = _machine(m, base)
@@ -345,6 +351,7 @@ def load_spec(path: str | Path) -> Spec:
         decision_rule=evaluation[0],
         part_number=number,
         part_name=name,
+        raised=raised,
     )
     m.done()
     prog.done()
