@@ -30,7 +30,9 @@ Options: ``--profile cmm`` or ``--profile 5axis`` (default both), ``--vm`` runs 
 setup's program on the virtual CMM or machine as ``probegen sim PROGRAM --part MODEL
 --machine PROFILE --setup SETUP`` does (the part at its nominal place turned as the setup
 says, a perfect probe, the profile's rack and trunnion), ``--json PATH`` writes the
-figures, ``--notes`` prints every left-out line.  Every DMIS program's ``PTMEAS`` points
+figures, ``--notes`` prints every left-out line, ``--raised MM`` stands every part that far
+above the machine table (parallels; the collision check's table, docs/spec.md; default 0,
+on it).  Every DMIS program's ``PTMEAS`` points
 are checked on the model (the setup's turned model for a setup's program): on it within
 1 um, with the vector pointing out of the material (``benchmarks/points_on_model.py``).
 """
@@ -484,6 +486,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--vm", action="store_true")
     parser.add_argument("--notes", action="store_true")
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--raised", type=float, default=0.0, metavar="MM",
+                        help="every part's lowest point this far above the machine table "
+                             "(parallels; default 0: on the table, docs/spec.md)")
     args = parser.parse_args(argv)
     probegen.cli.progress.ENABLED = False
     warnings.simplefilter("ignore")
@@ -500,7 +505,7 @@ def main(argv: list[str]) -> int:
         for model in args.models or default_models():
             t0 = time.perf_counter()
             try:
-                part = cad.load_part(model)
+                part = cad.load_part(model, raised=args.raised)
             except ProbegenError as exc:
                 print(f"{model.stem}: not loaded: {exc}", flush=True)
                 continue
