@@ -280,6 +280,26 @@ def test_cli_post_sim_post_ingest(tmp_path: Path) -> None:
                  str(tmp_path / "dcx.nc")]) == ExitCode.PLANNING
 
 
+def test_a_move_under_the_part_meets_the_table_unless_it_is_raised(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A GOTO down beside the simple part (100 x 100 x 50, its bottom at z = 0) to
+    z = -5: clear of the part, into the table it stands on (refused, naming the table and
+    the line); with ``--raised 10`` (parallels) the table is 10 mm below: posted."""
+    down = ("GOTO/-20.0,50.0,75.0\nGOTO/-20.0,50.0,-5.0\nGOTO/-20.0,50.0,75.0\n"
+            "GOTO/50.0,50.0,75.0")
+    program = tmp_path / "under.dmi"
+    program.write_text(PROGRAM.format(ball=4.0, extra=down))
+    args = ["post", str(program), "--machine", str(MACHINE), "--model", str(SIMPLE.model),
+            "-o", str(tmp_path / "under.nc")]
+    assert main(args) == ExitCode.PLANNING
+    err = capsys.readouterr().err
+    assert "under.dmi:10: GOTO/-20.0,50.0,-5.0: " in err, err
+    assert "the stylus ball cuts 7.000 mm into the table; expected a clearance of at least " \
+        "0.250 mm (the move ends too near the table or under it, whatever the route: " \
+        "--raised says how far the part stands above it)" in err, err
+    assert main([*args, "--raised", "10"]) == ExitCode.OK
+
+
 # ------------------------------------------------------------------ property tests
 
 PROFILE = load_profile(MACHINE)

@@ -201,7 +201,7 @@ def _post(args: argparse.Namespace) -> int:
     from probegen.post.files import post_file, write_post
 
     machine = load_profile(args.machine)
-    out = post_file(args.program, machine, load_part(args.model),
+    out = post_file(args.program, machine, load_part(args.model, raised=args.raised),
                     dialect=args.dialect, offset=tuple(args.model_offset),
                     skip_unsupported=args.skip_unsupported, reroute=args.reroute,
                     number=args.number, answers=_answers(args))
@@ -481,6 +481,10 @@ def _post_parsers(sub: Any) -> None:
     po.add_argument("--model-offset", type=finite, nargs=3, default=(0.0, 0.0, 0.0),
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
+    po.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
+                    help="how far the part's lowest point stands above the machine table "
+                         "(a fixture, parallels), mm: every move is kept off the table that "
+                         "far below it (default 0: on the table)")
     po.add_argument("--skip-unsupported", action="store_true",
                     help="leave out (and list) statements that cannot be translated, "
                          "never a measuring move (MEAS, PTMEAS)")

@@ -153,8 +153,11 @@ class _Post:
                 self.emit(self.position, [ir.Move(vec3(target), ir.MoveMode.PROTECTED)], st)
             except CollisionError as exc:
                 if not self.reroute:
-                    raise CollisionError(f"{exc} (--reroute lifts a positioning move over "
-                                         "the clearance plane)") from None
+                    hint = ("the move ends too near the table or under it, whatever the route: "
+                            "--raised says how far the part stands above it"
+                            if "the table" in str(exc) else
+                            "--reroute lifts a positioning move over the clearance plane")
+                    raise CollisionError(f"{exc} ({hint})") from None
                 self.lift(target, st)
         self.position = target
 
