@@ -211,6 +211,7 @@ def eligibility(part: Any, machine: Any) -> tuple[set[int], set[int], set[int]]:
 # ------------------------------------------------------------------ reasons
 
 REASONS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("table", ("no room above the table",)),
     ("too few touches", ("too few touches to evaluate",)),
     ("free fit", ("a free ",)),
     ("head grid", ("deg grid",)),

@@ -40,8 +40,10 @@ work coordinates."""
 TURN_KEY_DECIMALS = 9
 """A turned part is kept per rotation rounded to this many decimals (two rotations that
 agree to 1e-9 are one frame)."""
-RECENT_KEPT = 4
-"""How many values of one kind :meth:`Part.recent` keeps: the most recently used."""
+RECENT_KEPT = 8
+"""How many values of one kind :meth:`Part.recent` keeps: the most recently used (8:
+NIST CTC 1 with the CMM plans in 8 frames; with 4 it built 26 height maps, not 8, and
+planned 1.6 times slower; ``benchmarks/bench_recent_kept.py``)."""
 
 
 class Recent:

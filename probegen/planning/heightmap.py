@@ -159,8 +159,7 @@ class HeightMap:
             if w != width:  # w falls with |a|: one run of the filter in memory at a time
                 run, width = maximum_filter1d(pad, 2 * w + 1, axis=1, mode="constant",
                                               cval=-np.inf), w
-            for shift in dict.fromkeys((a, -a)):
-                np.maximum(out, np.roll(run, shift, axis=0), out=out)
+            shift_max(out, run, a)
         self._dilated[radius] = (out, k)
         return out, k
 
@@ -181,6 +180,17 @@ class HeightMap:
         out = np.full(len(a), -np.inf)
         np.maximum.at(out, seg, value)
         return out
+
+
+def shift_max(out: np.ndarray, run: np.ndarray, a: int) -> None:
+    """``out = max(out, run shifted by a rows)`` and by ``-a`` rows, in place: what
+    ``np.maximum(out, np.roll(run, ±a, axis=0))`` gives where the rows rolled round are
+    -inf (the height map's padding, at least ``a`` rows), without a copy of ``run``."""
+    if a == 0:
+        np.maximum(out, run, out=out)
+        return
+    np.maximum(out[a:], run[:-a], out=out[a:])
+    np.maximum(out[:-a], run[a:], out=out[:-a])
 
 
 def height_map(obstacle: MeshObstacle) -> HeightMap:
