@@ -20,7 +20,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench_memory import PROFILES, REPO, child
+from bench_memory import PROFILES, REPO, compare_rows
 
 
 def main(argv: list[str]) -> int:
@@ -31,19 +31,10 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(REPO))
     from probegen.planning import collision
 
-    shipped = collision.SKIP_SLACK
     print("| model | profile | every query s | skipped s | ratio | same programs |")
     print("|---|---|---|---|---|---|")
-    for model in args.models:
-        for key in args.profile or sorted(PROFILES):
-            collision.SKIP_SLACK = float("inf")
-            every = child(str(model), key)
-            collision.SKIP_SLACK = shipped
-            skipped = child(str(model), key)
-            a, b = every["sha256"], skipped["sha256"]
-            print(f"| {model.stem} | {key} | {every['plan_s']:.1f} | {skipped['plan_s']:.1f} "
-                  f"| {every['plan_s'] / skipped['plan_s']:.2f} | "
-                  f"{'yes' if a == b else 'NO'} ({a}, {b}) |", flush=True)
+    compare_rows(args.models, args.profile or sorted(PROFILES), collision, "SKIP_SLACK",
+                 float("inf"))
     return 0
 
 

@@ -33,6 +33,7 @@ import subprocess
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +77,37 @@ def child(model: str, key: str) -> dict[str, Any]:
             "maps_alive": len(maps),
             "maps_mb": round(sum(map_bytes(m) for m in maps) / 1e6, 1),
             "sha256": digest.hexdigest()[:12]}
+
+
+def before_and_after(model: str, key: str, module: Any, name: str,
+                     before: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """:func:`child` twice, each on a fresh load: first with ``module.name`` set to
+    ``before``, then as shipped (restored whatever happens); a benchmark's baseline and
+    its figure in one process."""
+    shipped = getattr(module, name)
+    setattr(module, name, before)
+    try:
+        first = child(model, key)
+    finally:
+        setattr(module, name, shipped)
+    return first, child(model, key)
+
+
+def compare_rows(models: list[Path], keys: list[str], module: Any, name: str, before: Any,
+                 extra: Callable[[dict[str, Any], dict[str, Any]], str] | None = None
+                 ) -> None:
+    """Per model and profile, :func:`before_and_after` as a Markdown row: model, profile,
+    both plan times (s), their ratio, ``extra`` of the two runs' figures where given, and
+    whether the programs are the same bytes (their digests)."""
+    for model in models:
+        for key in keys:
+            a, b = before_and_after(str(model), key, module, name, before)
+            cells = [model.stem, key, f"{a['plan_s']:.1f}", f"{b['plan_s']:.1f}",
+                     f"{a['plan_s'] / b['plan_s']:.2f}"]
+            cells += [extra(a, b)] if extra is not None else []
+            same = "yes" if a["sha256"] == b["sha256"] else "NO"
+            cells.append(f"{same} ({a['sha256']}, {b['sha256']})")
+            print("| " + " | ".join(cells) + " |", flush=True)
 
 
 def turned_parts(part: Any) -> list[Any]:

@@ -20,7 +20,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench_memory import PROFILES, REPO, child
+from bench_memory import PROFILES, REPO, compare_rows
 
 
 def main(argv: list[str]) -> int:
@@ -36,17 +36,8 @@ def main(argv: list[str]) -> int:
     print(f"| model | profile | {args.before} kept s | {shipped} kept s | ratio | "
           f"maps alive MB ({args.before}, {shipped}) | same programs |")
     print("|---|---|---|---|---|---|---|")
-    for model in args.models:
-        for key in args.profile or sorted(PROFILES):
-            part_module.RECENT_KEPT = args.before
-            before = child(str(model), key)
-            part_module.RECENT_KEPT = shipped
-            now = child(str(model), key)
-            a, b = before["sha256"], now["sha256"]
-            print(f"| {model.stem} | {key} | {before['plan_s']:.1f} | {now['plan_s']:.1f} "
-                  f"| {before['plan_s'] / now['plan_s']:.2f} | {before['maps_mb']:.0f}, "
-                  f"{now['maps_mb']:.0f} | {'yes' if a == b else 'NO'} ({a}, {b}) |",
-                  flush=True)
+    compare_rows(args.models, args.profile or sorted(PROFILES), part_module, "RECENT_KEPT",
+                 args.before, lambda a, b: f"{a['maps_mb']:.0f}, {b['maps_mb']:.0f}")
     return 0
 
 
