@@ -25,7 +25,7 @@ from typing import Any, NoReturn
 
 from probegen import __version__
 from probegen.cli.history import STORE_HELP
-from probegen.cli.options import dialect_help, finite, non_negative, positive
+from probegen.cli.options import RAISED_HELP, dialect_help, finite, non_negative, positive
 from probegen.cli.plan import _compile, _features, _macros, _plan, _sphere_points, _target
 from probegen.cli.probe import add_probe_options, probe_from_args
 from probegen.cli.results import (
@@ -301,10 +301,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "sections, 8 points)")
     pl.add_argument("--machine", help="machine profile (TOML), with --all-revolved")
     pl.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
-                    help="with --all-revolved: how far the part's lowest point stands above "
-                         "the machine table (a fixture, parallels), mm: the collision check "
-                         "keeps every stylus off the table that far below it (default 0: "
-                         "on the table)")
+                    help="with --all-revolved: " + RAISED_HELP)
     pl.add_argument("-d", "--dialect", action="append",
                     help="with -o: dialect of a program to write (repeatable; default: the "
                          f"spec's or the profile's): {dialect_help()}")
@@ -482,9 +479,7 @@ def _post_parsers(sub: Any) -> None:
                     metavar=("X", "Y", "Z"),
                     help="where the model's origin is in the program's coordinates, mm")
     po.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
-                    help="how far the part's lowest point stands above the machine table "
-                         "(a fixture, parallels), mm: every move is kept off the table that "
-                         "far below it (default 0: on the table)")
+                    help=RAISED_HELP)
     po.add_argument("--skip-unsupported", action="store_true",
                     help="leave out (and list) statements that cannot be translated, "
                          "never a measuring move (MEAS, PTMEAS)")

@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from probegen.cli.options import non_negative
+from probegen.cli.options import RAISED_HELP, non_negative
 from probegen.errors import ExitCode
 from probegen.files import write_file
 
@@ -145,7 +145,5 @@ def add_init_command(sub: Any) -> None:
                    help="the spec file to write (default: <model>.toml here; never "
                         "overwritten)")
     i.add_argument("--raised", type=non_negative, default=0.0, metavar="MM",
-                   help="how far the part's lowest point stands above the machine table (a "
-                        "fixture, parallels), mm: the collision check keeps every stylus "
-                        "off the table that far below it (default 0: on the table)")
+                   help=RAISED_HELP)
     i.set_defaults(func=_init)

@@ -23,6 +23,12 @@ def finite(text: str) -> float:
     return value
 
 
+RAISED_HELP = ("how far the part's lowest point stands above the machine table (a fixture, "
+               "parallels), mm: the collision check keeps every stylus off the table that "
+               "far below it (default 0: on the table)")
+"""The help of ``--raised`` (``plan --all-revolved``, ``init``, ``post``)."""
+
+
 def non_negative(text: str) -> float:
     """A finite number >= 0 (a noise sigma, a delay in seconds)."""
     value = finite(text)

@@ -259,6 +259,7 @@ class MeshObstacle:
         last = self._last.get(stylus)
         measured: list[tuple[np.ndarray, float]] = []
         least = np.inf
+        dims = stylus.cylinders()
         for k, (obj, mid) in enumerate(cylinders):
             if last is not None and k:
                 at, d = last[k]
@@ -268,8 +269,7 @@ class MeshObstacle:
             obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
             d = self._to(obj)
             if table is not None:
-                radius, low, high = stylus.cylinders()[k]
-                d = min(d, table.clearance(centre, radius, low, high))
+                d = min(d, table.clearance(centre, *dims[k]))
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured

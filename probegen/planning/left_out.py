@@ -26,10 +26,10 @@ if TYPE_CHECKING:
 _ARCS = re.compile(r"end margin ([\d.]+) mm, found arcs of ([\d., ]+?) mm")
 _SMALL = re.compile(r"inner radius ([\d.]+) mm: the safe circle R - r - d = [-\d.]+ mm: "
                     r"expected R > r \+ d")
-_HIT = re.compile(r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) mm)?"
-                  r"[^;]*?(?:into|of) face (\d+)")
-_TABLE = re.compile(r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) "
-                    r"mm)?[^;]*?(?:into|of) the table")
+_ELEMENT = r"the (stylus ball|stylus shank|stylus holder|probe body)(?: cuts ([\d.]+) mm)?"
+"""The stylus element a collision message names, and how deep it cuts (if it says)."""
+_HIT = re.compile(_ELEMENT + r"[^;]*?(?:into|of) face (\d+)")
+_TABLE = re.compile(_ELEMENT + r"[^;]*?(?:into|of) the table")
 _TILTED = re.compile(r"at the nearest head index \w+ the stylus stands [\d.]+ deg off the "
                      r"feature's axis")
 _CLIMB = re.compile(r"approach from \([^,]+, [^,]+, ([-\d.]+)\) to \([^,]+, [^,]+, ([-\d.]+)\)")
