@@ -33,8 +33,8 @@ def main(argv: list[str]) -> int:
 
     print("| model | profile | every query s | skipped s | ratio | same programs |")
     print("|---|---|---|---|---|---|")
-    compare_rows(args.models, args.profile or sorted(PROFILES), collision, "SKIP_SLACK",
-                 float("inf"))
+    compare_rows(args.models, args.profile or sorted(PROFILES),
+                 [(collision, "SKIP_SLACK", float("inf"))])
     return 0
 
 

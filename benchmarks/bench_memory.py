@@ -79,21 +79,28 @@ def child(model: str, key: str) -> dict[str, Any]:
             "sha256": digest.hexdigest()[:12]}
 
 
-def before_and_after(model: str, key: str, module: Any, name: str,
-                     before: Any) -> tuple[dict[str, Any], dict[str, Any]]:
-    """:func:`child` twice, each on a fresh load: first with ``module.name`` set to
-    ``before``, then as shipped (restored whatever happens); a benchmark's baseline and
-    its figure in one process."""
-    shipped = getattr(module, name)
-    setattr(module, name, before)
+Swap = tuple[Any, str, Any]
+"""A baseline's setting: ``(owner, name, before)``: ``owner.name`` (a module's constant, a
+class's method) is ``before`` in the baseline run."""
+
+
+def before_and_after(model: str, key: str,
+                     swaps: list[Swap]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """:func:`child` twice, each on a fresh load: first with every ``owner.name`` of
+    ``swaps`` set to its ``before``, then as shipped (restored whatever happens); a
+    benchmark's baseline and its figure in one process."""
+    shipped = [(owner, name, getattr(owner, name)) for owner, name, _ in swaps]
+    for owner, name, before in swaps:
+        setattr(owner, name, before)
     try:
         first = child(model, key)
     finally:
-        setattr(module, name, shipped)
+        for owner, name, value in shipped:
+            setattr(owner, name, value)
     return first, child(model, key)
 
 
-def compare_rows(models: list[Path], keys: list[str], module: Any, name: str, before: Any,
+def compare_rows(models: list[Path], keys: list[str], swaps: list[Swap],
                  extra: Callable[[dict[str, Any], dict[str, Any]], str] | None = None
                  ) -> None:
     """Per model and profile, :func:`before_and_after` as a Markdown row: model, profile,
@@ -101,7 +108,7 @@ def compare_rows(models: list[Path], keys: list[str], module: Any, name: str, be
     whether the programs are the same bytes (their digests)."""
     for model in models:
         for key in keys:
-            a, b = before_and_after(str(model), key, module, name, before)
+            a, b = before_and_after(str(model), key, swaps)
             cells = [model.stem, key, f"{a['plan_s']:.1f}", f"{b['plan_s']:.1f}",
                      f"{a['plan_s'] / b['plan_s']:.2f}"]
             cells += [extra(a, b)] if extra is not None else []

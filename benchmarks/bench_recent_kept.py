@@ -36,8 +36,9 @@ def main(argv: list[str]) -> int:
     print(f"| model | profile | {args.before} kept s | {shipped} kept s | ratio | "
           f"maps alive MB ({args.before}, {shipped}) | same programs |")
     print("|---|---|---|---|---|---|---|")
-    compare_rows(args.models, args.profile or sorted(PROFILES), part_module, "RECENT_KEPT",
-                 args.before, lambda a, b: f"{a['maps_mb']:.0f}, {b['maps_mb']:.0f}")
+    compare_rows(args.models, args.profile or sorted(PROFILES),
+                 [(part_module, "RECENT_KEPT", args.before)],
+                 lambda a, b: f"{a['maps_mb']:.0f}, {b['maps_mb']:.0f}")
     return 0
 
 

@@ -128,6 +128,33 @@ def test_a_move_under_the_part_is_refused_by_both_checks(disc: Path) -> None:
     assert clear_segments([[(a + up, b + up)]], obstacle, stylus, MARGIN)[0]
 
 
+def test_clearance_asks_the_table_first_and_agrees_with_each_element(disc: Path) -> None:
+    """``MeshObstacle.clearance`` skips the part's query of an element the table puts at
+    least as deep as that query can report: its figures are those of each element's own
+    distance (the part's or the table's, the lesser: ``clearance_of``), on a grid of
+    centres beside, over and under the disc's foot; and ``face_of`` names the table for
+    an element in it and clear of the part (no distance query)."""
+    from probegen.planning.intrusion import elements
+
+    part = cad.load_part(disc)
+    obstacle = obstacle_for(part, [])
+    stylus = probe_stylus(load_profile(CMM), 0.5, 0.35, 20.0)  # D1, with the body
+    ball, shank, body = elements(stylus.ball, stylus.cylinders())
+    in_table = 0
+    for x in (21.0, 24.0, 30.0):
+        for z in (-30.0, -20.5, -3.0, -0.2, 0.4, 2.0, 12.0):
+            c = np.array([x, 0.0, z])
+            got = obstacle.clearance(c, stylus)
+            want = (obstacle.clearance_of(c, ball),
+                    min(obstacle.clearance_of(c, shank), obstacle.clearance_of(c, body)))
+            assert got == pytest.approx(want, abs=1e-9), (c, got, want)
+            in_table += got[0] < -1.0
+    assert in_table >= 4  # the shortcut was taken
+    c = np.array([40.0, 0.0, -25.0])  # the body's lower end 5 mm into the table, 13 mm off
+    assert obstacle.face_of(c, body) == NAME
+    assert obstacle.face_of(np.array([20.3, 0.0, 5.0]), ball).startswith("face ")
+
+
 _unit = st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(
     lambda v: 0.1 < math.hypot(*v) <= 1.0)
 

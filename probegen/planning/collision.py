@@ -249,13 +249,15 @@ class MeshObstacle:
         be the least: a distance moves no more than the stylus does (1-Lipschitz), so
         ``d_last - |centre - centre_last|`` bounds it from below, and where that bound
         exceeds the shank's clearance by :data:`SKIP_SLACK` the result is the shank's,
-        the same value as with the query (a sweep's next points are near its last)."""
+        the same value as with the query (a sweep's next points are near its last).  Nor
+        is the part's distance of an element the table's clearance puts at or below
+        :attr:`floor` (the least the part's can be): the table's is the least."""
         ball, cylinders = self._stylus(stylus)
-        ball.setTranslation(centre)
-        b = self._to(ball)
         table = self.table
-        if table is not None:
-            b = min(b, table.clearance(centre, stylus.ball))
+        b = np.inf if table is None else table.clearance(centre, stylus.ball)
+        if b > self.floor:  # in the table at least as deep as the part can report: no query
+            ball.setTranslation(centre)
+            b = min(b, self._to(ball))
         last = self._last.get(stylus)
         measured: list[tuple[np.ndarray, float]] = []
         least = np.inf
@@ -266,10 +268,10 @@ class MeshObstacle:
                 if d - float(np.linalg.norm(centre - at)) >= least + SKIP_SLACK:
                     measured.append(last[k])
                     continue
-            obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
-            d = self._to(obj)
-            if table is not None:
-                d = min(d, table.clearance(centre, *dims[k]))
+            d = np.inf if table is None else table.clearance(centre, *dims[k])
+            if d > self.floor:
+                obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
+                d = min(d, self._to(obj))
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured
@@ -403,7 +405,8 @@ class MeshObstacle:
 
     def face_of(self, centre: np.ndarray, e: Element) -> str:
         """The face (or triangle) element ``e`` meets deepest with the ball's centre at
-        ``centre``, else the nearest one (one BVH query each)."""
+        ``centre`` (the table where it goes deeper into that), else the table where it
+        reaches into it, else the nearest face (one BVH query each)."""
         fcl = self.fcl
         obj = self._shape(centre, e)
         hit = fcl.CollisionResult()
@@ -415,6 +418,9 @@ class MeshObstacle:
             if -table > max(tris)[0]:
                 return TABLE
             tri = max(tris)[1]
+        elif table < 0.0:
+            return TABLE  # in the table and clear of the part: no distance query (one
+            # with a probe body next to the part costs milliseconds)
         else:
             near = fcl.DistanceResult()
             fcl.distance(self.part, obj, fcl.DistanceRequest(enable_nearest_points=True),
