@@ -90,6 +90,17 @@ def test_raised_on_parallels_the_same_section_is_planned(disc: Path) -> None:
     assert sum(isinstance(n, ir.Touch) for n in ir.walk(program.body)) == 6
 
 
+def test_a_part_loaded_at_another_height_than_the_spec_says_is_refused(disc: Path) -> None:
+    """The spec says where the table is (``[part] raised``); a part handed to
+    ``plan_program`` that stands elsewhere would put the table of the collision check
+    elsewhere: refused, naming both heights."""
+    spec_path = disc.parent / "disc_mismatch.toml"
+    spec_path.write_text(SPEC.format(model=disc, profile=CMM, depth=9.9, raised=2.0))
+    spec = load_spec(spec_path)
+    with pytest.raises(ProbegenError, match=r"raised = 2 mm.* stands 0 mm above the table"):
+        plan_program(spec, runtime_variables=False, part=cad.load_part(disc))
+
+
 def test_raised_must_not_be_negative(disc: Path) -> None:
     with pytest.raises(ProbegenError, match=r"raised.*(at least|>=|minimum)"):
         _plan(disc, 5.0, raised=-1.0)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from probegen import ir
+from probegen.errors import SpecError
 from probegen.machine.profile import MachineProfile
 from probegen.planning import locate
 from probegen.planning.actions import (
@@ -131,6 +132,10 @@ def plan_program(spec: Spec, *, runtime_variables: bool,
     machine = spec.machine
     if part is None:
         part = part_of(spec)
+    elif abs(part.raised - spec.raised) > 1e-9:  # the table the check keeps the stylus off
+        raise SpecError(f"{spec.source}: [part] raised = {spec.raised:g} mm, but the part "
+                        f"handed in stands {part.raised:g} mm above the table (load it "
+                        "with load_part(path, raised=spec.raised))")
     body: list[ir.Node] = []
     plans: list[SphereTestPlan] = []
     revolved: list[RevolvedPlan] = []

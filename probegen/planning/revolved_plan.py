@@ -453,6 +453,6 @@ def check_alone(p: RevolvedPlan, part: Part, machine: MachineProfile,
     """
     spec = Spec(source=part.path, model=Path(part.path), machine=machine,
                 dialect=machine.dialect, clearance_z=clearance_z, program_number=1001,
-                program_name="ALL REVOLVED", features=(p.spec,))
+                program_name="ALL REVOLVED", features=(p.spec,), raised=part.raised)
     program = ir.Program(make_setup(spec), revolved_nodes(p, machine, clearance_z))
     check_program(program, obstacle_for(part, []), [], machine)

@@ -142,7 +142,7 @@ def all_revolved_spec(part: Part, machine: MachineProfile) -> tuple[Spec, tuple[
     features, notes = all_revolved(part, machine, clearance)
     spec = Spec(source=part.path, model=Path(part.path), machine=machine,
                 dialect=machine.dialect, clearance_z=clearance, program_number=1001,
-                program_name="ALL REVOLVED", features=features)
+                program_name="ALL REVOLVED", features=features, raised=part.raised)
     return spec, notes
 
 

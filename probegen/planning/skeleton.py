@@ -269,7 +269,7 @@ def _compiles(part: Part, machine: MachineProfile, clearance: float, feature: Fe
 
     spec = Spec(source=part.path, model=Path(part.path), machine=machine,
                 dialect=machine.dialect, clearance_z=clearance, program_number=1001,
-                program_name="INIT", features=(feature,))
+                program_name="INIT", features=(feature,), raised=part.raised)
     try:
         plan_program(spec, runtime_variables=True, part=part)
     except ProbegenError as exc:
