@@ -16,27 +16,18 @@ programs' text is the same bytes (SHA-256, first 12 digits).
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
+from typing import Any
 
-from bench_memory import PROFILES, REPO, compare_rows
+from bench_memory import compare_main
 
 
-def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--profile", choices=sorted(PROFILES), action="append")
-    parser.add_argument("models", nargs="+", type=Path)
-    args = parser.parse_args(argv)
-    sys.path.insert(0, str(REPO))
+def swaps() -> list[Any]:
+    """The baseline: no bound ever skips the body's query."""
     from probegen.planning import collision
 
-    print("| model | profile | every query s | skipped s | ratio | same programs |")
-    print("|---|---|---|---|---|---|")
-    compare_rows(args.models, args.profile or sorted(PROFILES),
-                 [(collision, "SKIP_SLACK", float("inf"))])
-    return 0
+    return [(collision, "SKIP_SLACK", float("inf"))]
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(compare_main(sys.argv[1:], __doc__, "every query s | skipped s", swaps))

@@ -117,6 +117,23 @@ def compare_rows(models: list[Path], keys: list[str], swaps: list[Swap],
             print("| " + " | ".join(cells) + " |", flush=True)
 
 
+def compare_main(argv: list[str], doc: str, header: str,
+                 swaps: Callable[[], list[Swap]]) -> int:
+    """The command line of a before-and-after benchmark: ``[--profile P ...] MODEL ...``;
+    prints the Markdown table (``header``: the two timed columns' names, e.g. ``every
+    query s | skipped s``) with a row per model and profile (:func:`compare_rows`) of
+    the ``swaps`` (made after the repository is on the path)."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--profile", choices=sorted(PROFILES), action="append")
+    parser.add_argument("models", nargs="+", type=Path)
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(REPO))
+    print(f"| model | profile | {header} | ratio | same programs |")
+    print("|---|---|---|---|---|---|")
+    compare_rows(args.models, args.profile or sorted(PROFILES), swaps())
+    return 0
+
+
 def turned_parts(part: Any) -> list[Any]:
     """The turned parts kept on ``part`` and on the parts of its setups (their memos'
     ``turned`` and ``setup`` entries), each once."""

@@ -173,9 +173,11 @@ def _others(kind: str, points: FloatArray, kept: AxialFit,
             continue
         if _distinct(other, base) and all(_distinct(other, seen) for seen in found):
             found.append(other)
-    return tuple(f"the points also fit {_describe(o, offset)} (RMS residual {_num(o.rms, 4)} "
-                 f"against {_num(base.rms, 4)}); the fit kept the one nearest the nominal"
-                 for o in found)
+    return tuple(sorted(  # in the text's order, not the starts': the same report whichever
+        # start a solver's last digits lead to which solution
+        f"the points also fit {_describe(o, offset)} (RMS residual {_num(o.rms, 4)} "
+        f"against {_num(base.rms, 4)}); the fit kept the one nearest the nominal"
+        for o in found))
 
 
 def _num(value: float, digits: int = 3) -> str:

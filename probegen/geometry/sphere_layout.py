@@ -28,6 +28,10 @@ LAYOUTS = ("iso", "octahedral", "cap")
 Array = NDArray[np.float64]
 
 
+
+TIE = 1e-9
+"""Distances (of unit vectors) closer than this are equal in :func:`zigzag_order`."""
+
 def from_angles(theta_deg: Array, phi_deg: Array) -> Array:
     """Return unit vectors for polar angles and azimuths in degrees.
 
@@ -229,7 +233,11 @@ def zigzag_order(points: Array, *, band: float | None = None) -> list[int]:
             ring = ring[::-1]
         if out:
             last = p[out[-1]]
-            start = min(range(len(ring)), key=lambda j: (np.linalg.norm(p[ring[j]] - last), j))
+            gaps = [float(np.linalg.norm(p[i] - last)) for i in ring]
+            # the first of the nearest, distances within TIE of each other being equal
+            # (a ring about the pole: all equal but for the last digits, which differ
+            # between numpy builds)
+            start = next(j for j, g in enumerate(gaps) if g <= min(gaps) + TIE)
             ring = ring[start:] + ring[:start]
         out += ring
     return out

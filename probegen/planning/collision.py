@@ -63,6 +63,10 @@ MIN_STEP = 0.01
 at this pitch, and the clearance between samples can be lower by at most half of it."""
 MESH_TOLERANCE = 0.01
 """Chordal deviation of the part mesh, mm; subtracted from every measured clearance."""
+TABLE_FIRST = True
+"""Whether :class:`MeshObstacle` skips the part's queries the machine table makes needless
+(:meth:`MeshObstacle.clearance`, :meth:`MeshObstacle.face_of`); the same figures either
+way (``benchmarks/bench_table_first.py`` times both)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -255,7 +259,8 @@ class MeshObstacle:
         ball, cylinders = self._stylus(stylus)
         table = self.table
         b = np.inf if table is None else table.clearance(centre, stylus.ball)
-        if b > self.floor:  # in the table at least as deep as the part can report: no query
+        if b > self.floor or not TABLE_FIRST:  # else in the table as deep as the part
+            # can report: no query
             ball.setTranslation(centre)
             b = min(b, self._to(ball))
         last = self._last.get(stylus)
@@ -269,7 +274,7 @@ class MeshObstacle:
                     measured.append(last[k])
                     continue
             d = np.inf if table is None else table.clearance(centre, *dims[k])
-            if d > self.floor:
+            if d > self.floor or not TABLE_FIRST:
                 obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
                 d = min(d, self._to(obj))
             measured.append((np.array(centre, dtype=np.float64), d))
@@ -418,7 +423,7 @@ class MeshObstacle:
             if -table > max(tris)[0]:
                 return TABLE
             tri = max(tris)[1]
-        elif table < 0.0:
+        elif table < 0.0 and TABLE_FIRST:
             return TABLE  # in the table and clear of the part: no distance query (one
             # with a probe body next to the part costs milliseconds)
         else:
