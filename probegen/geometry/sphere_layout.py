@@ -26,11 +26,9 @@ from probegen.constants import tol
 LAYOUTS = ("iso", "octahedral", "cap")
 
 Array = NDArray[np.float64]
-
-
-
 TIE = 1e-9
 """Distances (of unit vectors) closer than this are equal in :func:`zigzag_order`."""
+
 
 def from_angles(theta_deg: Array, phi_deg: Array) -> Array:
     """Return unit vectors for polar angles and azimuths in degrees.

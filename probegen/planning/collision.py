@@ -258,11 +258,8 @@ class MeshObstacle:
         :attr:`floor` (the least the part's can be): the table's is the least."""
         ball, cylinders = self._stylus(stylus)
         table = self.table
-        b = np.inf if table is None else table.clearance(centre, stylus.ball)
-        if b > self.floor or not TABLE_FIRST:  # else in the table as deep as the part
-            # can report: no query
-            ball.setTranslation(centre)
-            b = min(b, self._to(ball))
+        b = self._with_part(ball, centre, np.inf if table is None
+                            else table.clearance(centre, stylus.ball))
         last = self._last.get(stylus)
         measured: list[tuple[np.ndarray, float]] = []
         least = np.inf
@@ -273,14 +270,21 @@ class MeshObstacle:
                 if d - float(np.linalg.norm(centre - at)) >= least + SKIP_SLACK:
                     measured.append(last[k])
                     continue
-            d = np.inf if table is None else table.clearance(centre, *dims[k])
-            if d > self.floor or not TABLE_FIRST:
-                obj.setTranslation(centre + np.array([0.0, 0.0, mid]))
-                d = min(d, self._to(obj))
+            d = self._with_part(obj, centre + np.array([0.0, 0.0, mid]), np.inf
+                                if table is None else table.clearance(centre, *dims[k]))
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured
         return b, least
+
+    def _with_part(self, obj: Any, at: np.ndarray, table: float) -> float:
+        """The lesser of the ``table``'s clearance and ``obj``'s distance to the part with
+        ``obj`` placed ``at``; the table's alone where it is at or below :attr:`floor`
+        (the least the part's can be: no query), as :data:`TABLE_FIRST` says, mm."""
+        if table <= self.floor and TABLE_FIRST:
+            return table
+        obj.setTranslation(at)
+        return min(table, self._to(obj))
 
     def _to(self, obj: Any) -> float:
         """The distance from ``obj`` to the part less the mesh's tolerance, mm."""
