@@ -12,7 +12,8 @@ queried for every element (``collision.TABLE_FIRST`` false: the check as it was 
 the change), then as shipped.  It prints both plan times (wall clock, s), their ratio and
 whether the programs are the same bytes (SHA-256, first 12 digits).  The change pays
 where the table refuses moves: a probe body's distance query next to the part costs
-milliseconds (a 40 mm body beside a 16 000-triangle mesh: about 7 ms).
+milliseconds (a 40 mm body beside a 16 000-triangle mesh: about 6 ms,
+``benchmarks/bench_body_query.py``).
 """
 
 from __future__ import annotations
