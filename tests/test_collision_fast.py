@@ -221,11 +221,15 @@ def test_the_body_query_skipped_only_where_it_cannot_be_the_least(
             assert kept.clearance(c, stylus) == fresh.clearance(c, stylus)
 
 
-def test_the_body_query_is_skipped_where_the_body_is_far() -> None:
+def test_the_body_query_is_skipped_where_the_body_is_far(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     """The ball just above the part's top: the body (20 mm up) is far, the shank near;
-    a second point 0.1 mm on takes the body's distance from the first (not queried)."""
+    a second point 0.1 mm on takes the body's distance from the first (not queried).
+    (The grown collision test, which would settle both, is off.)"""
+    from probegen.planning import collision
     from probegen.planning.collision import Stylus
 
+    monkeypatch.setattr(collision, "GROWN_FIRST", False)
     stylus = Stylus(1.5, 1.0, 20.0, 6.6, 65.0)
     obstacle = MeshObstacle(PART.mesh(), None)
     top = PART.bbox_max[2]
@@ -238,3 +242,68 @@ def test_the_body_query_is_skipped_where_the_body_is_far() -> None:
 
 
 _FAST_OBSTACLES = (MeshObstacle(PART.mesh(), None), MeshObstacle(PART.mesh(), None))
+
+
+@settings(max_examples=examples(60), suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.floats(-60.0, 60.0), st.floats(-60.0, 60.0),
+                          st.floats(-5.0, 80.0)), min_size=1, max_size=8),
+       st.floats(0.0, 2.0))
+def test_the_grown_body_test_changes_no_figure(
+        centres: list[tuple[float, float, float]], step: float) -> None:
+    """``MeshObstacle.clearance`` with the grown body's collision test first
+    (``collision.GROWN_FIRST``) gives exactly what it gives with the body's distance
+    queried, along any sequence of centres (each also nudged by ``step``)."""
+    from probegen.planning import collision
+    from probegen.planning.collision import Stylus
+
+    stylus = Stylus(1.5, 1.0, 20.0, 6.6, 65.0)
+    grown, queried = _GROWN_OBSTACLES
+    for x, y, z in centres:
+        for c in (np.array([x, y, z]), np.array([x + step, y, z - step])):
+            with_test = grown.clearance(c, stylus)
+            collision.GROWN_FIRST = False
+            try:
+                without = queried.clearance(c, stylus)
+            finally:
+                collision.GROWN_FIRST = True
+            assert with_test == without, (c, with_test, without)
+
+
+_GROWN_OBSTACLES = (MeshObstacle(PART.mesh(), None), MeshObstacle(PART.mesh(), None))
+
+
+def test_the_grown_body_test_saves_the_body_query_and_nearest_agrees() -> None:
+    """The ball 2 mm over the part's top: the body (20 mm up) is settled by the grown
+    collision test, its distance never queried; ``nearest`` names the element with the
+    least ``clearance_of`` (the first of equals) at centres near and far, querying the
+    body's distance only where it could be the least."""
+    from probegen.planning.collision import Stylus
+    from probegen.planning.intrusion import elements
+
+    stylus = Stylus(1.5, 1.0, 20.0, 6.6, 65.0)
+    obstacle = MeshObstacle(PART.mesh(), None)
+    queried: list[float] = []
+    to = obstacle._to
+
+    def counted(obj: Any) -> float:
+        d = to(obj)
+        queried.append(d)
+        return d
+
+    obstacle._to = counted  # type: ignore[method-assign]
+    top = PART.bbox_max[2]
+    mid = (np.asarray(PART.bbox_min) + np.asarray(PART.bbox_max)) / 2.0
+    centre = np.array([mid[0], mid[1], top + 2.0])
+    got = obstacle.clearance(centre, stylus)
+    assert len(queried) == 2  # the ball and the shank: not the body
+    parts = elements(stylus.ball, stylus.cylinders())[1:]
+    assert got[1] == obstacle.clearance_of(centre, parts[0])  # the shank's
+    skipped = 0
+    for dz in (-25.0, -10.0, 0.5, 2.0, 30.0, 70.0):
+        for dx in (-80.0, 0.0, 40.0):
+            c = np.array([mid[0] + dx, mid[1], top + dz])
+            queried.clear()
+            near = obstacle.nearest(c, parts)
+            skipped += len(queried) < len(parts)
+            assert near == min(parts, key=lambda e: obstacle.clearance_of(c, e)), c
+    assert skipped >= 3

@@ -166,6 +166,28 @@ def test_clearance_asks_the_table_first_and_agrees_with_each_element(disc: Path)
     assert obstacle.face_of(np.array([20.3, 0.0, 5.0]), ball).startswith("face ")
 
 
+def test_the_grown_body_test_keeps_the_table_figure(disc: Path) -> None:
+    """The disc turned a quarter about X (the table a wall beside the probe): the body,
+    far from the part, is settled by its grown collision test (``collision.GROWN_FIRST``)
+    and its clearance is then the table's, nearer than the shank's: the figures are each
+    element's own (``clearance_of``)."""
+    from probegen.planning.intrusion import elements
+
+    part = cad.load_part(disc).turned(((1.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0)))
+    obstacle = obstacle_for(part, [])
+    stylus = probe_stylus(load_profile(CMM), 0.5, 0.35, 20.0)  # D1, with the body
+    ball, shank, body = elements(stylus.ball, stylus.cylinders())
+    for centre in ((60.0, 12.0, 0.0), (60.0, 8.0, -30.0), (25.0, 14.0, 5.0),
+                   (45.0, 30.0, -10.0)):
+        c = np.array(centre)
+        got = obstacle.clearance(c, stylus)
+        want = (obstacle.clearance_of(c, ball),
+                min(obstacle.clearance_of(c, shank), obstacle.clearance_of(c, body)))
+        assert got == pytest.approx(want, abs=1e-9), (c, got, want)
+    # the table (frame y = 0) is the body's nearest: 12 - 6.6 mm
+    assert obstacle.clearance(np.array([60.0, 12.0, 0.0]), stylus)[1] == pytest.approx(5.4)
+
+
 _unit = st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(
     lambda v: 0.1 < math.hypot(*v) <= 1.0)
 

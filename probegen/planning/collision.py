@@ -67,6 +67,11 @@ TABLE_FIRST = True
 """Whether :class:`MeshObstacle` skips the part's queries the machine table makes needless
 (:meth:`MeshObstacle.clearance`, :meth:`MeshObstacle.face_of`); the same figures either
 way (``benchmarks/bench_table_first.py`` times both)."""
+GROWN_FIRST = True
+"""Whether :meth:`MeshObstacle.clearance` tests the probe body grown by the shank's
+clearance for a collision before it queries the body's distance (:meth:`MeshObstacle.
+_beyond`); the same figures either way (``benchmarks/bench_grown_first.py`` times
+both)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -255,7 +260,10 @@ class MeshObstacle:
         exceeds the shank's clearance by :data:`SKIP_SLACK` the result is the shank's,
         the same value as with the query (a sweep's next points are near its last).  Nor
         is the part's distance of an element the table's clearance puts at or below
-        :attr:`floor` (the least the part's can be): the table's is the least."""
+        :attr:`floor` (the least the part's can be): the table's is the least.  Nor,
+        where a collision test of the body grown by that margin finds no triangle
+        (:meth:`_beyond`, a fraction of a distance query's cost), is the body's: it is
+        not the least, or the table's clearance is its own (:data:`GROWN_FIRST`)."""
         ball, cylinders = self._stylus(stylus)
         table = self.table
         b = self._with_part(ball, centre, np.inf if table is None
@@ -270,12 +278,35 @@ class MeshObstacle:
                 if d - float(np.linalg.norm(centre - at)) >= least + SKIP_SLACK:
                     measured.append(last[k])
                     continue
-            d = self._with_part(obj, centre + np.array([0.0, 0.0, mid]), np.inf
-                                if table is None else table.clearance(centre, *dims[k]))
+            at_k = centre + np.array([0.0, 0.0, mid])
+            on_table = np.inf if table is None else table.clearance(centre, *dims[k])
+            bound = least + SKIP_SLACK
+            if k and GROWN_FIRST and on_table > self.floor and bound < np.inf \
+                    and self._beyond(dims[k], at_k, bound):
+                # the part's distance is at least ``bound``: the element's clearance is
+                # the table's where that is less (exactly), else at least ``bound``
+                d = min(on_table, bound)
+            else:
+                d = self._with_part(obj, at_k, on_table)
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured
         return b, least
+
+    def _beyond(self, cylinder: tuple[float, float, float], at: np.ndarray,
+                bound: float) -> bool:
+        """Whether the part's distance query (:meth:`_to`) of the ``cylinder`` (radius,
+        low, high) with its middle ``at`` is certainly at least ``bound``: the cylinder
+        grown by ``g = bound + MESH_TOLERANCE + SKIP_SLACK`` in radius and at both ends
+        holds every point within ``g`` of it, and meets no triangle of the mesh (an fcl
+        collision test; :data:`SKIP_SLACK` covers fcl's tolerance)."""
+        radius, low, high = cylinder
+        g = max(bound, 0.0) + MESH_TOLERANCE + SKIP_SLACK
+        fcl = self.fcl
+        grown = fcl.CollisionObject(fcl.Cylinder(radius + g, high - low + 2.0 * g),
+                                    fcl.Transform(at))
+        return not fcl.collide(grown, self.part, fcl.CollisionRequest(),
+                               fcl.CollisionResult())
 
     def _with_part(self, obj: Any, at: np.ndarray, table: float) -> float:
         """The lesser of the ``table``'s clearance and ``obj``'s distance to the part with
@@ -411,6 +442,26 @@ class MeshObstacle:
         """The distance from element ``e`` (ball's centre at ``centre``) to the part less
         the mesh's tolerance, or to the table where that is less, mm."""
         return min(self._to(self._shape(centre, e)), self._table_clearance(centre, e))
+
+    def nearest(self, centre: np.ndarray, parts: Sequence[Element]) -> Element:
+        """The element of ``parts`` (the ball's centre at ``centre``) with the least
+        :meth:`clearance_of`, the first of equals: ``min(parts, key=...)``, without the
+        distance query of a cylinder that the table and a collision test of it grown
+        (:meth:`_beyond`) put beyond the least so far (:data:`GROWN_FIRST`)."""
+        best: Element | None = None
+        least = np.inf
+        for e in parts:
+            if best is not None and GROWN_FIRST and e.low is not None and e.high is not None:
+                bound = least + SKIP_SLACK
+                at = centre + np.array([0.0, 0.0, (e.low + e.high) / 2.0])
+                if self._table_clearance(centre, e) >= bound \
+                        and self._beyond((e.radius, e.low, e.high), at, bound):
+                    continue
+            d = self.clearance_of(centre, e)
+            if best is None or d < least:
+                best, least = e, d
+        assert best is not None, "no element"
+        return best
 
     def face_of(self, centre: np.ndarray, e: Element) -> str:
         """The face (or triangle) element ``e`` meets deepest with the ball's centre at
@@ -807,7 +858,9 @@ def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
     if part == "shank" and stylus is not None and face_of is not None \
             and clearance_of is not None:
         parts = elements(stylus.ball, stylus.cylinders())[1:]
-        near = min(parts, key=lambda p: clearance_of(worst, p))
+        nearest = getattr(obstacle, "nearest", None)
+        near = nearest(worst, parts) if nearest is not None else min(
+            parts, key=lambda p: clearance_of(worst, p))
         part, name = near.name, face_of(worst, near)
     else:
         name = obstacle.name_at(worst)
