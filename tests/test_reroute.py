@@ -124,3 +124,41 @@ def test_a_bore_too_small_for_the_usual_retract_gets_a_shorter_one(
     assert [s.retract for s in h.plan.sections] == pytest.approx([retract, retract])
     assert len(h.normals) == 12
     assert planned.clearance.minimum >= 0.0
+
+
+def test_what_a_refused_move_ran_into_is_measured_when_first_read(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``Sweeper.move`` describes a refused move (``collision.describe``: how deep the
+    stylus cuts into which face) only when its text is first read, once; the text is
+    the one made at once before (the planner drops most such texts unread)."""
+    from build123d import Align, Box, Cylinder, Pos, export_step
+
+    from probegen import cad
+    from probegen.machine.profile import load_profile
+    from probegen.planning import reroute
+    from probegen.planning.collision import obstacle_for
+
+    model = tmp_path / "boss.step"
+    export_step(Pos(0, 0, -5) * Box(80, 80, 5, align=(Align.CENTER, Align.CENTER, Align.MIN))
+                + Cylinder(10, 10, align=(Align.CENTER, Align.CENTER, Align.MIN)), model)
+    machine = load_profile(PROFILE)
+    sweeper = reroute.Sweeper(obstacle_for(cad.load_part(model), []), machine,
+                              machine.probe.ball_radius)
+    calls: list[int] = []
+    describe = reroute.describe
+
+    def counted(*args: object, **kw: object) -> str:
+        calls.append(1)
+        return describe(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(reroute, "describe", counted)
+    assert sweeper.move((30.0, 0.0, 5.0), (30.0, 0.0, 20.0)) is None  # clear of the boss
+    why = sweeper.move((30.0, 0.0, 5.0), (0.0, 0.0, 5.0))  # through the boss
+    assert why is not None and calls == []  # refused, not yet described
+    note = reroute.Text.format("touch {} dropped: its approach {}", 3, why)
+    assert calls == []
+    text = str(note)
+    assert text.startswith("touch 3 dropped: its approach from (30.000, 0.000, 5.000) to "
+                           "(0.000, 0.000, 5.000): the stylus ball comes within ")
+    assert " mm of face " in text and calls == [1]
+    assert f"{why}" == str(why) == text.split("its approach ", 1)[1] and calls == [1]

@@ -28,8 +28,9 @@ Paths that cleared unchanged come back unchanged (byte-identical programs).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from itertools import pairwise
 
 import numpy as np
@@ -52,6 +53,45 @@ from probegen.planning.heightmap import FCL_SLACK, clear_segments, height_map
 from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint, path_length
 
 Vec3 = tuple[float, float, float]
+
+
+LAZY = True
+"""Whether :meth:`Sweeper.move` describes a refused move only when its text is read
+(:class:`Text`); the same texts either way (``benchmarks/bench_lazy_refusals.py`` times
+both)."""
+
+
+class Text:
+    """A message made when it is first read (``str``, ``format``), then kept: what a
+    refused move ran into is measured (:func:`probegen.planning.collision.describe`:
+    how deep the stylus cuts into the part) only for the messages a user reads, not for
+    each of the many attempts a planner tries and drops (another retract, section,
+    stylus or head index).  The same text either way."""
+
+    __slots__ = ("_make", "_text")
+
+    def __init__(self, make: Callable[[], str]) -> None:
+        self._make: Callable[[], str] | None = make
+        self._text: str | None = None
+
+    def __str__(self) -> str:
+        if self._text is None:
+            assert self._make is not None
+            self._text, self._make = self._make(), None
+        return self._text
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+    def __repr__(self) -> str:
+        return f"Text({str(self)!r})"
+
+    @classmethod
+    def format(cls, template: str, *args: object) -> Text:
+        """``template.format(*args)`` when first read (a :class:`Text` among ``args``
+        read then)."""
+        return cls(partial(template.format, *args))
+
 LIFT_HEIGHTS = (5.0, 15.0)
 """Lift heights tried, mm above the higher end of a link, after the local height (or
 instead of it when the obstacle has no mesh) and before the clearance level."""
@@ -74,17 +114,21 @@ class Sweeper:
         self.required = machine.margin / 2.0
         self.feeds = machine.feeds
 
-    def move(self, a: ArrayLike, b: ArrayLike, *, touch: bool = False) -> str | None:
-        """None when the straight move ``a → b`` (mm) clears, else what it runs into
-        (``touch``: the move is a touch, see :func:`swept`)."""
-        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    def move(self, a: ArrayLike, b: ArrayLike, *, touch: bool = False) -> Text | None:
+        """None when the straight move ``a → b`` (mm) clears, else what it runs into,
+        described when first read (:class:`Text`; ``touch``: the move is a touch, see
+        :func:`swept`)."""
+        pa, pb = np.array(a, dtype=np.float64), np.array(b, dtype=np.float64)
         ball, shank, worst = swept(self.obstacle, pa, pb, 0.0, 0.0, self.stylus,
                                    self.required, first=True, bound=not touch)
         if min(ball, shank) - self.required >= 0.0:
             return None
-        q = self.required
-        what = describe(self.obstacle, ball - q, shank - q, q, worst, self.stylus, pb)
-        return f"from {fmt(pa)} to {fmt(pb)}: {what}"
+        q, obstacle, stylus, at = self.required, self.obstacle, self.stylus, np.array(worst)
+        text = Text(lambda: f"from {fmt(pa)} to {fmt(pb)}: "
+                    f"{describe(obstacle, ball - q, shank - q, q, at, stylus, pb)}")
+        if not LAZY:
+            str(text)
+        return text
 
     def refused(self, a: ArrayLike, b: ArrayLike) -> bool:
         """True when the check certainly refuses the move ``a → b``: the ball swept along
@@ -107,7 +151,7 @@ class Sweeper:
         return bool(fcl.collide(obj, self.obstacle.part, fcl.CollisionRequest(),
                                 fcl.CollisionResult()))
 
-    def path(self, points: Sequence[ArrayLike]) -> str | None:
+    def path(self, points: Sequence[ArrayLike]) -> Text | None:
         """None when every move of the polyline clears, else the first collision (the
         height map's fast check first: :func:`probegen.planning.heightmap.clear_segments`,
         then the exact sweeps)."""
@@ -159,7 +203,7 @@ class Sweeper:
         return None
 
     def touch(self, contact: ArrayLike, normal: ArrayLike,
-              approach: float) -> str | None:
+              approach: float) -> Text | None:
         """None when a touch from ``approach`` mm off the contact clears (as checked in
         the program: up to the stop short of the contact), else what it runs into."""
         c, n = np.asarray(contact, dtype=np.float64), np.asarray(normal, dtype=np.float64)
@@ -204,12 +248,12 @@ class Rerouted:
         plan: the safe plan (touches renumbered from 1 in measuring order).
         dropped: touch indices of the input plan that were left out.
         notes: one line per change (dropped touches, lifts, split runs), with the
-            collision that forced it.
+            collision that forced it (:class:`Text`: ``str`` of each reads it).
     """
 
     plan: FeaturePlan
     dropped: tuple[int, ...]
-    notes: tuple[str, ...]
+    notes: tuple[Text | str, ...]
 
 
 def _stations(plan: FeaturePlan) -> tuple[list[Station], list[list[PathPoint]]]:
@@ -248,19 +292,19 @@ class _Router:
     def __init__(self, plan: FeaturePlan, sweeper: Sweeper) -> None:
         self.plan, self.sweeper = plan, sweeper
         self.stations, self.legs = _stations(plan)
-        self.notes: list[str] = []
-        self._access: dict[int, str | None] = {}
+        self.notes: list[Text | str] = []
+        self._access: dict[int, Text | None] = {}
 
     def _positions(self, points: Sequence[PathPoint]) -> list[tuple[float, float, float]]:
         return [p.position for p in points]
 
-    def touch_ok(self, k: int) -> str | None:
+    def touch_ok(self, k: int) -> Text | None:
         s = self.stations[k]
         section = self.plan.sections[s.safe.section]
         assert s.target.contact is not None and s.target.normal is not None
         return self.sweeper.touch(s.target.contact, s.target.normal, section.retract)
 
-    def access(self, k: int) -> str | None:
+    def access(self, k: int) -> Text | None:
         """None when station ``k`` is reached straight down from the clearance level."""
         if k not in self._access:
             safe = self.stations[k].safe
@@ -268,7 +312,7 @@ class _Router:
             self._access[k] = self.sweeper.move(high.position, safe.position)
         return self._access[k]
 
-    def leg(self, a: int, b: int) -> tuple[list[PathPoint] | None, str]:
+    def leg(self, a: int, b: int) -> tuple[list[PathPoint] | None, Text | str]:
         """The points strictly between stations ``a < b`` that clear, or None and why."""
         planned: list[PathPoint] = []
         for k in range(a, b):
@@ -286,10 +330,11 @@ class _Router:
             return planned, ""
         if points is not None:
             lift = [PathPoint(PathKind.LIFT, q) for q in points[1:-1]]
-            self.notes.append(f"touches {sa.index}-{sb.index}: lifted to "
-                              f"z = {max(q[2] for q in points):.3f}, "
-                              + ("not by the clearance level" if why is None
-                                 else f"the planned move {why}"))
+            top = max(q[2] for q in points)
+            self.notes.append(Text.format(
+                "touches {}-{}: lifted to z = {:.3f}, {}{}", sa.index, sb.index, top,
+                "not by the clearance level" if why is None else "the planned move ",
+                "" if why is None else why))
             return lift, ""
         lift = [_at(sa, clear, PathKind.CLEAR), _at(sb, clear, PathKind.CLEAR)]
         if self.sweeper.path(self._positions([sa, *lift, sb])) is None:
@@ -306,9 +351,10 @@ def _runs(router: _Router, kept: list[int]) -> list[list[tuple[int, list[PathPoi
             if leg is not None:
                 runs[-1].append((k, leg))
                 continue
-            router.notes.append(f"touches {router.stations[runs[-1][-1][0]].safe.index} and "
-                                f"{router.stations[k].safe.index}: no clear move between "
-                                f"them ({why}); left by the clearance level")
+            i, j = router.stations[runs[-1][-1][0]].safe.index, router.stations[k].safe.index
+            router.notes.append(Text.format(
+                "touches {} and {}: no clear move between them ({}); left by the clearance "
+                "level", i, j, why))
         runs.append([(k, [])])
     return runs
 
@@ -359,21 +405,25 @@ def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
             kept.append(k)
         else:
             dropped.append(k)
-            router.notes.append(f"touch {stations[k].safe.index} dropped: its approach {why}")
+            router.notes.append(Text.format("touch {} dropped: its approach {}",
+                                            stations[k].safe.index, why))
     pieces: list[list[PathPoint]] = []
     for run in _runs(router, kept):
         open_ = [j for j, (k, _) in enumerate(run) if router.access(k) is None]
         if not open_:
             first = stations[run[0][0]].safe.index
             last = stations[run[-1][0]].safe.index
-            router.notes.append(f"touches {first}-{last} dropped: no clear way down from the "
-                                f"clearance level (the descent {router.access(run[0][0])})")
+            descent = router.access(run[0][0])
+            router.notes.append(Text.format(
+                "touches {}-{} dropped: no clear way down from the clearance level (the "
+                "descent {})", first, last, descent))
             dropped += [k for k, _ in run]
             continue
         pieces.append(_walk(router, run, open_[0], open_[-1]))
     if not pieces:
-        raise RerouteError(f"feature {plan.feature}: no touch can be reached safely: "
-                           + "; ".join(router.notes))
+        raise RerouteError(Text.format(
+            "feature {}: no touch can be reached safely: {}", plan.feature,
+            Text(partial("; ".join, map(str, tuple(router.notes))))))
     safe = _assemble(plan, pieces, sweeper)
     return Rerouted(plan if safe.path == plan.path else safe, tuple(sorted(
         stations[k].safe.index for k in dropped)), tuple(router.notes))

@@ -26,7 +26,7 @@ from probegen.ir import frames
 from probegen.machine.profile import MachineProfile
 from probegen.planning.collision import check_program, obstacle_for
 from probegen.planning.reach import reach_fractions
-from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, reroute
+from probegen.planning.reroute import Rerouted, RerouteError, Sweeper, Text, reroute
 from probegen.planning.revolved import FeaturePlan, Section, feature_nodes, plan_feature, section_of
 from probegen.planning.revolved_geometry import ArcTooShortError
 from probegen.planning.setup import make_setup
@@ -295,7 +295,7 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
             plan = _plan_touches(sections, feature, machine, retract, clearance_z)
             safe = reroute(plan if view is None else express(plan, view), sweeper)
         except RerouteError as exc:  # a CollisionError, itself a PlanningError
-            errors.append(RerouteError(f"{feature.where}: {exc}"))
+            errors.append(RerouteError(Text.format("{}: {}", feature.where, exc)))
             continue
         except PlanningError as exc:
             errors.append(PlanningError(f"{feature.where}: {exc}"))
@@ -400,12 +400,15 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         raise errors[own - 1 if own else 0]
     chosen, safe, why = best
     if why:
-        raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free)}")
+        lost = next((str(n) for n in safe.notes
+                     if str(n).startswith("touch") and " dropped: " in str(n)), "")
+        raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free, lost)}")
     if view is not None:
         return RevolvedPlan(feature, resolved_in(view.turn, chosen), safe.plan,
                             frames.definition_in_work(view.turn, definition(chosen)),
-                            safe.notes)
-    return RevolvedPlan(feature, chosen, safe.plan, definition(chosen), safe.notes)
+                            tuple(map(str, safe.notes)))
+    return RevolvedPlan(feature, chosen, safe.plan, definition(chosen),
+                        tuple(map(str, safe.notes)))
 
 
 def unrouted(feature: RevolvedSpec, part: Part, machine: MachineProfile,

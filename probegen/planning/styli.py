@@ -104,7 +104,9 @@ def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
         return last
     texts = [str(exc).splitlines()[0] if str(exc) else type(exc).__name__
              for _, exc in failures]
-    common = os.path.commonprefix(texts)
+    # the common lead up to its last ": " before any parenthesis (a detail in
+    # parentheses, such as the touch a collision dropped, is each stylus's own)
+    common = os.path.commonprefix(texts).split(" (", 1)[0]
     cut = common.rfind(": ") + 2 if ": " in common else 0
     said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
                      for (s, _), text in zip(failures, texts, strict=True))

@@ -147,11 +147,14 @@ TOO_FEW = "too few touches to evaluate it: "
 """How :func:`unevaluable` starts the reason of a feature below the complete measurement."""
 
 
-def refused_reason(kind: str, why: str, free: bool) -> str:
+def refused_reason(kind: str, why: str, free: bool, lost: str = "") -> str:
     """The sentence of a feature refused for ``why`` (:func:`unevaluable`; ``free``: for
-    a target that fits freely), with what the user can do."""
+    a target that fits freely), with what the user can do; ``lost``: for too few
+    touches, what took the others (the collision check's first dropped touch, e.g.
+    ``touch 1 dropped: its approach ... comes within 0.140 mm of face 190; ...``)."""
     if why.startswith(TOO_FEW):  # no ": " after the counts: pick_stylus quotes from them
-        return (f"{kind}: {why}; give more points or sections where the part lets the "
+        lost = f" (the rest dropped by the collision check, e.g. {lost})" if lost else ""
+        return (f"{kind}: {why}{lost}; give more points or sections where the part lets the "
                 "probe reach them (points = N, sections = [...]), or another stylus, "
                 "orientation or a setup")
     fits = "a CMM fits it freely" if free else "probegen fits it"
