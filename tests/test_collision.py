@@ -99,3 +99,18 @@ def test_swept_volume_bound_never_exceeds_the_sampled_clearance() -> None:
                             for t in np.linspace(0.0, 1.0, 101)])
         assert bound[0] <= sampled[:, 0].min() + 1e-4
         assert bound[1] <= sampled[:, 1].min() + 1e-4
+
+
+def test_a_gap_just_short_of_the_required_clearance_is_shown_short() -> None:
+    """A clearance 0.3 um short of the required 0.150 mm is not written "comes within
+    0.150 mm ...; expected at least 0.150 mm" (no fault to read) but with the digits that
+    show it short; a gap the usual three decimals already show keeps them."""
+    from probegen.planning.collision import describe
+
+    spheres = SphereObstacle(np.array([[0.0, 0.0, 0.0]]), np.array([10.0]))
+    at = np.array([20.0, 0.0, 0.0])
+    text = describe(spheres, -0.0003, 5.0, 0.15, at)
+    assert text == ("the stylus ball comes within 0.1497 mm of sphere 1; expected a "
+                    "clearance of at least 0.150 mm")
+    assert describe(spheres, -0.02, 5.0, 0.15, at).startswith(
+        "the stylus ball comes within 0.130 mm of sphere 1;")

@@ -853,7 +853,13 @@ def describe(obstacle: Obstacle, ball: float, shank: float, required: float,
         return (f"{who} cuts {words(hit, e.radius)} into {face_of(hit.at, e)}; expected a "
                 f"clearance of at least {required:.3f} mm")
     part = "ball" if ball < shank else "shank"
-    how = f"comes within {gap:.3f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
+    # a gap that rounds up to the required clearance is given to as many more digits as
+    # show it short: "comes within 0.150 mm ...; expected at least 0.150 mm" reads as no
+    # fault at all
+    digits = 3
+    while 0.0 <= gap < required and digits < 6 and round(gap, digits) >= required:
+        digits += 1
+    how = f"comes within {gap:.{digits}f} mm of" if gap >= 0.0 else f"cuts {-gap:.3f} mm into"
     clearance_of = getattr(obstacle, "clearance_of", None)
     if part == "shank" and stylus is not None and face_of is not None \
             and clearance_of is not None:
