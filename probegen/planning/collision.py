@@ -280,18 +280,27 @@ class MeshObstacle:
                     continue
             at_k = centre + np.array([0.0, 0.0, mid])
             on_table = np.inf if table is None else table.clearance(centre, *dims[k])
-            bound = least + SKIP_SLACK
-            if k and GROWN_FIRST and on_table > self.floor and bound < np.inf \
-                    and self._beyond(dims[k], at_k, bound):
-                # the part's distance is at least ``bound``: the element's clearance is
-                # the table's where that is less (exactly), else at least ``bound``
-                d = min(on_table, bound)
-            else:
-                d = self._with_part(obj, at_k, on_table)
+            settled = self._settled(dims[k], at_k, on_table, least) \
+                if k and on_table > self.floor else None
+            d = self._with_part(obj, at_k, on_table) if settled is None else settled
             measured.append((np.array(centre, dtype=np.float64), d))
             least = min(least, d)
         self._last[stylus] = measured
         return b, least
+
+    def _settled(self, cylinder: tuple[float, float, float], at: np.ndarray, table: float,
+                 least: float) -> float | None:
+        """What the grown test (:meth:`_beyond`) settles of the clearance of ``cylinder``
+        (radius, low, high; its middle ``at``, the ``table``'s clearance of it) beside
+        elements whose least is ``least``, without the part's distance query: the part is
+        at least ``bound = least + SKIP_SLACK`` away, so the clearance is the table's where
+        that is less (exactly), else at least ``bound`` (above ``least``: not the least).
+        None where nothing is settled (:data:`GROWN_FIRST` off, no ``least`` yet, or the
+        grown cylinder meets the mesh)."""
+        bound = least + SKIP_SLACK
+        if not GROWN_FIRST or bound == np.inf or not self._beyond(cylinder, at, bound):
+            return None
+        return min(table, bound)
 
     def _beyond(self, cylinder: tuple[float, float, float], at: np.ndarray,
                 bound: float) -> bool:
@@ -446,18 +455,18 @@ class MeshObstacle:
     def nearest(self, centre: np.ndarray, parts: Sequence[Element]) -> Element:
         """The element of ``parts`` (the ball's centre at ``centre``) with the least
         :meth:`clearance_of`, the first of equals: ``min(parts, key=...)``, without the
-        distance query of a cylinder that the table and a collision test of it grown
-        (:meth:`_beyond`) put beyond the least so far (:data:`GROWN_FIRST`)."""
+        distance query of a cylinder whose clearance the grown test settles against the
+        least so far (:meth:`_settled`)."""
         best: Element | None = None
         least = np.inf
         for e in parts:
-            if best is not None and GROWN_FIRST and e.low is not None and e.high is not None:
-                bound = least + SKIP_SLACK
+            d = None
+            if e.low is not None and e.high is not None:
                 at = centre + np.array([0.0, 0.0, (e.low + e.high) / 2.0])
-                if self._table_clearance(centre, e) >= bound \
-                        and self._beyond((e.radius, e.low, e.high), at, bound):
-                    continue
-            d = self.clearance_of(centre, e)
+                d = self._settled((e.radius, e.low, e.high), at,
+                                  self._table_clearance(centre, e), least)
+            if d is None:
+                d = self.clearance_of(centre, e)
             if best is None or d < least:
                 best, least = e, d
         assert best is not None, "no element"

@@ -249,11 +249,13 @@ class Rerouted:
         dropped: touch indices of the input plan that were left out.
         notes: one line per change (dropped touches, lifts, split runs), with the
             collision that forced it (:class:`Text`: ``str`` of each reads it).
+        first_drop: the first of the notes that drops touches (``""`` when none does).
     """
 
     plan: FeaturePlan
     dropped: tuple[int, ...]
     notes: tuple[Text | str, ...]
+    first_drop: Text | str = ""
 
 
 def _stations(plan: FeaturePlan) -> tuple[list[Station], list[list[PathPoint]]]:
@@ -293,7 +295,13 @@ class _Router:
         self.plan, self.sweeper = plan, sweeper
         self.stations, self.legs = _stations(plan)
         self.notes: list[Text | str] = []
+        self.first_drop: Text | str = ""
         self._access: dict[int, Text | None] = {}
+
+    def drop(self, note: Text) -> None:
+        """Note touches dropped (the first such note is :attr:`Rerouted.first_drop`)."""
+        self.notes.append(note)
+        self.first_drop = self.first_drop or note
 
     def _positions(self, points: Sequence[PathPoint]) -> list[tuple[float, float, float]]:
         return [p.position for p in points]
@@ -405,8 +413,8 @@ def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
             kept.append(k)
         else:
             dropped.append(k)
-            router.notes.append(Text.format("touch {} dropped: its approach {}",
-                                            stations[k].safe.index, why))
+            router.drop(Text.format("touch {} dropped: its approach {}",
+                                    stations[k].safe.index, why))
     pieces: list[list[PathPoint]] = []
     for run in _runs(router, kept):
         open_ = [j for j, (k, _) in enumerate(run) if router.access(k) is None]
@@ -414,19 +422,19 @@ def reroute(plan: FeaturePlan, sweeper: Sweeper) -> Rerouted:
             first = stations[run[0][0]].safe.index
             last = stations[run[-1][0]].safe.index
             descent = router.access(run[0][0])
-            router.notes.append(Text.format(
+            router.drop(Text.format(
                 "touches {}-{} dropped: no clear way down from the clearance level (the "
                 "descent {})", first, last, descent))
             dropped += [k for k, _ in run]
             continue
         pieces.append(_walk(router, run, open_[0], open_[-1]))
     if not pieces:
-        raise RerouteError(Text.format(
-            "feature {}: no touch can be reached safely: {}", plan.feature,
-            Text(partial("; ".join, map(str, tuple(router.notes))))))
+        notes = tuple(router.notes)
+        raise RerouteError(Text(lambda: f"feature {plan.feature}: no touch can be reached "
+                                "safely: " + "; ".join(map(str, notes))))
     safe = _assemble(plan, pieces, sweeper)
     return Rerouted(plan if safe.path == plan.path else safe, tuple(sorted(
-        stations[k].safe.index for k in dropped)), tuple(router.notes))
+        stations[k].safe.index for k in dropped)), tuple(router.notes), router.first_drop)
 
 
 def _assemble(plan: FeaturePlan, pieces: list[list[PathPoint]],

@@ -400,8 +400,7 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
         raise errors[own - 1 if own else 0]
     chosen, safe, why = best
     if why:
-        lost = next((str(n) for n in safe.notes
-                     if str(n).startswith("touch") and " dropped: " in str(n)), "")
+        lost = str(safe.first_drop)
         raise IllPosedError(f"{feature.where}: {refused_reason(feature.kind, why, free, lost)}")
     if view is not None:
         return RevolvedPlan(feature, resolved_in(view.turn, chosen), safe.plan,
