@@ -232,6 +232,28 @@ def _retracts(feature: RevolvedSpec, machine: MachineProfile,
     return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
 
 
+def _fitting(retract: float, machine: MachineProfile, sections: list[Section]) -> float:
+    """The retract an alternative choice of sections tries after ``retract`` (the one
+    that served the default sections best): less where a bore section's safe circle
+    would keep under :data:`SMALL_BORE_CORE` in radius with it, the largest that keeps
+    it.  Below :data:`LEAST_RETRACT` margins a bore (a cylinder's section) keeps
+    ``retract`` (:func:`smallest_bore` is the narrowest bore a stylus measures), and a
+    tilted section (a cone's, a sphere's or a torus's, whose radius is the planner's
+    choice of section: a drill point's near its tip) takes the least retract, which
+    its own check refuses only where the safe circle vanishes."""
+    low = LEAST_RETRACT * machine.margin
+    out = retract
+    for s in sections:
+        if not s.inner:
+            continue
+        fits = s.radius / math.cos(s.tilt) - machine.probe.ball_radius - SMALL_BORE_CORE
+        if fits >= low:
+            out = min(out, fits)
+        elif s.tilt != 0.0:
+            out = min(out, low)
+    return out
+
+
 def smallest_bore(machine: MachineProfile) -> float:
     """The smallest bore diameter the profile's stylus measures, mm: the ball and the
     smallest retract :func:`_retracts` tries (at least 1.5 margins, and in a small bore
@@ -281,15 +303,16 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
                retract_only: float | None = None, view: View | None = None
                ) -> Rerouted | None:
     """The rerouted plan of one choice of sections with the first retract of
-    :func:`_retracts` (or ``retract_only``) that keeps every touch, else the one that
-    keeps the most (None when none plans; the reasons go to ``errors``); with ``view``
-    the plan is expressed in its frame (:func:`probegen.planning.tilted.express`) and
+    :func:`_retracts` (or ``retract_only``, then the one :func:`_fitting` gives these
+    sections where it is less) that keeps every touch, else the one that keeps the
+    most (None when none plans; the reasons go to ``errors``); with ``view`` the plan
+    is expressed in its frame (:func:`probegen.planning.tilted.express`) and
     rerouted there (``sweeper`` is the view's)."""
     feature = resolved.spec
     sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
     best: Rerouted | None = None
-    retracts = _retracts(feature, machine, sections) if retract_only is None else (
-        retract_only,)
+    retracts = _retracts(feature, machine, sections) if retract_only is None else tuple(
+        sorted({retract_only, _fitting(retract_only, machine, sections)}, reverse=True))
     for retract in retracts:
         try:
             plan = _plan_touches(sections, feature, machine, retract, clearance_z)
@@ -378,7 +401,8 @@ def _plan_revolved(feature: RevolvedSpec, part: Part, machine: MachineProfile,
     best: tuple[ResolvedRevolved, Rerouted, str] | None = None
     own = 0  # the errors of the feature's own sections (the first candidate)
     for k, candidate in enumerate(_candidates(resolved, part, machine, tilted)):
-        # other sections only with the retract that served the default ones best
+        # other sections only with the retract that served the default ones best (or
+        # less where their bore sections are smaller: _fitting)
         only = best[1].plan.sections[0].retract if k and best is not None else None
         safe = _plan_safe(candidate, machine, clearance_z, sweeper, errors, only, view)
         own = own if k else len(errors)
