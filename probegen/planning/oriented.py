@@ -251,7 +251,7 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
                 continue
             ranked = screen(touches_in_work(touches, exact), feature.kind, a, obstacle,
                             probe_stylus(m, m.probe.ball_radius), m.margin / 2.0, head,
-                            -1.0 if sphere else tilt_bound(head), free_fit(m))
+                            -1.0 if sphere else tilt_bound(head), free_fit(m), TRIED)
             for angles in ranked[:TRIED]:
                 tries += 1
                 if tries > MOST_PLANS:

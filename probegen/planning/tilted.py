@@ -46,6 +46,9 @@ TRIED = 2
 MOST_PLANS = 6
 """Indices planned per feature at most (every approach and stylus together): a feature
 none of them measures is left out (planning one is the reroute of every touch)."""
+PRUNED = True
+""":func:`screen` with ``best`` stops testing where the first ``best`` cannot change
+(False: every index and touch tested, the benchmark's baseline)."""
 MOST_TILT = 97.5
 """The stylus stands at most this far (deg) off the feature's axis (approach out of the
 open end): beyond, it would reach back under the feature's own end."""
@@ -155,8 +158,9 @@ def _angle(u: np.ndarray, v: np.ndarray) -> float:
 
 def screen(touches: Sequence[Touch], kind: str, axis: ir.Vec3, obstacle: Any,
            stylus: Stylus, required: float, head: Head, least_tilt: float,
-           free: bool) -> list[tuple[float, float]]:
-    """The head's indices worth planning a feature at, best first.
+           free: bool, best: int | None = None) -> list[tuple[float, float]]:
+    """The head's indices worth planning a feature at, best first (with ``best``, only
+    the first ``best`` of them).
 
     An index is kept when the stylus along its direction (shank and probe body, the
     collision check's :class:`~probegen.planning.collision.Stylus`) stands clear of the
@@ -168,27 +172,49 @@ def screen(touches: Sequence[Touch], kind: str, axis: ir.Vec3, obstacle: Any,
     axis out of the end it is approached from, work coordinates); its tilt off
     ``axis`` more than ``least_tilt`` and at most :data:`MOST_TILT` deg.  Best first:
     the most clear touches, then the least tilt, then the order of
-    :func:`head_indices`."""
+    :func:`head_indices`.
+
+    With ``best`` (and :data:`PRUNED`) the indices are tested least tilt first and the
+    tests stop where they cannot change the first ``best``: an index is left as soon
+    as the touches still untested could not bring it above the ``best``-th kept one (a
+    later index ties it only with more tilt), and the screen ends when the ``best``-th
+    kept one has every touch clear.  The same first ``best`` as the full ranking."""
     fcl = obstacle.fcl
     part = obstacle.part
     u = np.asarray(axis, dtype=np.float64)
-    ranked: list[tuple[int, float, int, tuple[float, float]]] = []
     objects = [(fcl.Cylinder(radius + required, high - low), 0.5 * (low + high))
                for radius, low, high in stylus.cylinders()]
+    bound = best if PRUNED else None
+    indices: list[tuple[float, int, tuple[float, float], np.ndarray]] = []
     for k, (a_deg, b_deg) in enumerate(head_indices(head)):
         a = np.asarray(frames.head_approach(a_deg, b_deg))
         tilt = _angle(a, u)
-        if not least_tilt < tilt <= MOST_TILT:
-            continue
+        if least_tilt < tilt <= MOST_TILT:
+            indices.append((tilt, k, (a_deg, b_deg), a))
+    if bound is not None:
+        indices.sort(key=lambda i: (i[0], i[1]))
+    ranked: list[tuple[int, float, int, tuple[float, float]]] = []
+    for tilt, k, angles, a in indices:
+        # the clear touches the index must beat: the best-th kept so far
+        beat = -ranked[bound - 1][0] if bound is not None and len(ranked) >= bound else -1
+        if beat == len(touches):
+            break  # the best kept have every touch clear: no later index is better
         rot = np.asarray(rotation_to_z(a)).T  # takes +Z onto a
-        clear = [t for t in touches if not any(
-            fcl.collide(fcl.CollisionObject(shape, fcl.Transform(rot, t.centre + mid * a)),
-                        part, fcl.CollisionRequest(), fcl.CollisionResult())
-            for shape, mid in objects)]
-        if not clear or incomplete(kind, [t.section for t in clear]):
-            continue
-        if free and undetermined(kind, np.array([t.contact for t in clear]), axis):
-            continue
-        ranked.append((-len(clear), tilt, k, (a_deg, b_deg)))
+        clear: list[Touch] = []
+        for n, t in enumerate(touches):
+            if not any(fcl.collide(fcl.CollisionObject(shape, fcl.Transform(
+                    rot, t.centre + mid * a)), part, fcl.CollisionRequest(),
+                    fcl.CollisionResult()) for shape, mid in objects):
+                clear.append(t)
+            elif len(clear) + len(touches) - n - 1 <= beat:
+                break  # cannot beat the best-th kept
+        else:
+            if not clear or incomplete(kind, [t.section for t in clear]):
+                continue
+            if free and undetermined(kind, np.array([t.contact for t in clear]), axis):
+                continue
+            ranked.append((-len(clear), tilt, k, angles))
+            if bound is not None:
+                ranked = sorted(ranked)[:bound]
     ranked.sort()
     return [r[3] for r in ranked]
