@@ -30,7 +30,7 @@ import numpy as np
 from probegen import ir
 from probegen.errors import CollisionError, PlanningError, ProbegenError
 from probegen.ir import frames
-from probegen.machine.profile import MachineProfile, Stylus
+from probegen.machine.profile import Head, MachineProfile, Stylus
 from probegen.planning.collision import obstacle_for, probe_stylus
 from probegen.planning.orient import (
     Orientation,
@@ -221,15 +221,20 @@ def _plan_along(feature: RevolvedSpec, owner: Any, part: Part, machine: MachineP
 
 def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: MachineProfile,
                  clearance_z: float, force: str | None) -> OrientedPlan | None:
-    """A feature the probe along its axis does not measure, probed by a CMM's head at an
-    index that leans the stylus off the axis (:mod:`probegen.planning.tilted`): out of
-    each end :func:`approaches` gives, with each stylus of the rack (largest first, or
-    the one the spec forces), the best :data:`~probegen.planning.tilted.TRIED` indices
+    """A feature the probe along its axis does not measure, probed with the stylus
+    leaning off the axis (:mod:`probegen.planning.tilted`): a CMM's head at one of its
+    indices, a five-axis machine's tilted work plane (G68.2) along a direction of the
+    same grid (:func:`lean_grid`: every :data:`LEAN_STEP` deg within the tilt axis's
+    range, :func:`~probegen.planning.orient.orientation_for` turning each into the
+    machine's angles).  Out of each end :func:`approaches` gives, with each stylus of the
+    rack (largest first, or the one the spec forces), the best
+    :data:`~probegen.planning.tilted.TRIED` directions
     :func:`~probegen.planning.tilted.screen` finds, until one plans (its path checked
     against the part and the table under it, :mod:`probegen.planning.table`: a
-    countersink facing down is not reached from below the part); None when none does, on a
-    machine without a head, or for a feature with a work-offset or align action."""
-    head = machine.head
+    countersink facing down is not reached from below the part); None when none does, on
+    a machine that cannot lean the probe, or for a feature with a work-offset or align
+    action."""
+    head = machine.head if machine.head is not None else lean_grid(machine)
     if head is None or feature.actions.work_offset is not None or (
             feature.actions.align is not None):
         return None
@@ -253,20 +258,49 @@ def _plan_tilted(feature: RevolvedSpec, owner: Any, part: Part, machine: Machine
                             probe_stylus(m, m.probe.ball_radius), m.margin / 2.0, head,
                             -1.0 if sphere else tilt_bound(head), free_fit(m), TRIED)
             for angles in ranked[:TRIED]:
+                o = _leaning(machine, angles, exact)
+                if o is None:
+                    continue
                 tries += 1
                 if tries > MOST_PLANS:
                     return None
-                index = frames.frame_for(head_direction(*angles))
-                o = Orientation(index, angles, (), exact)
-                turned = part if o.identity else part.turned(index)
+                turned = part if o.identity else part.turned(o.rotation)
                 clear = frame_clearance(part, o, clearance_z)
                 try:
                     plan = plan_revolved(own_feature, own, m, own_clear,
-                                         view_of(index, exact, turned, clear))
+                                         view_of(o.rotation, exact, turned, clear))
                 except PlanningError:
                     continue
                 return OrientedPlan(replace(plan, spec=feature), o, s, turned, clear)
     return None
+
+
+LEAN_STEP = 7.5
+"""The step (deg) of the directions a five-axis machine leans the probe in to reach a
+feature off its axis (:func:`lean_grid`): a CMM head's usual index step."""
+
+
+def lean_grid(machine: MachineProfile) -> Head | None:
+    """The directions a five-axis machine's tilted work plane may lean the probe in,
+    as a head's grid (:func:`~probegen.planning.tilted.head_indices`): A from vertical
+    to the tilt axis's reach, B a whole turn, every :data:`LEAN_STEP` deg; None without
+    a ``[tilt]``."""
+    if machine.tilt is None:
+        return None
+    low, high = machine.tilt.tilt_range
+    return Head(a=(0.0, max(high, -low)), b=(-180.0, 180.0), step=LEAN_STEP)
+
+
+def _leaning(machine: MachineProfile, angles: tuple[float, float],
+             exact: frames.Rotation) -> Orientation | None:
+    """The orientation that probes along the grid direction ``angles`` (``(A, B)``,
+    deg) a feature planned in frame ``exact``: a CMM head's index, or a five-axis
+    machine's tilted plane (None where its axes do not reach it)."""
+    direction = head_direction(*angles)
+    if machine.head is not None:
+        return Orientation(frames.frame_for(direction), angles, (), exact)
+    o = orientation_for(machine, direction)
+    return None if isinstance(o, str) else replace(o, exact=exact)
 
 
 def _at_index(planner: Callable[[MachineProfile], RevolvedPlan], feature: RevolvedSpec,
