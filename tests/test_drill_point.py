@@ -25,6 +25,7 @@ from conftest import REPO
 from probegen import cad
 from probegen.cli.app import main
 from probegen.dialects import get_dialect
+from probegen.errors import PlanningError
 from probegen.machine.profile import load_profile
 from probegen.planning import plan_program
 from probegen.planning.revolved import PathKind
@@ -56,12 +57,12 @@ def model(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def _spec(model: Path, tmp_path: Path) -> Path:
+def _spec(model: Path, tmp_path: Path, extra: str = "") -> Path:
     at = RADIUS / 2.0, 0.0, TIP + RADIUS / 2.0 / math.tan(HALF)  # halfway up the point
     spec = tmp_path / "drill_point.toml"
     spec.write_text(f'[part]\nmodel = "{model.as_posix()}"\n\n[machine]\nprofile = '
                     f'"{PROFILE.as_posix()}"\n\n[[feature]]\nid = "TIP"\nkind = "cone"\n'
-                    f'at = [{at[0]}, {at[1]}, {at[2]}]\nstylus = "D1"\npoints = 8\n')
+                    f'at = [{at[0]}, {at[1]}, {at[2]}]\nstylus = "D1"\npoints = 8\n{extra}')
     return spec
 
 
@@ -79,6 +80,16 @@ def test_a_drill_point_is_measured_in_two_sections_with_the_least_retract(
     assert planned.clearance.minimum >= 0.0  # the program's check clears every move
     targets = [p for p in tip.plan.path if p.kind is PathKind.TARGET]
     assert len(targets) == 16
+
+
+def test_the_spec_s_retract_is_kept(model: Path, tmp_path: Path) -> None:
+    """A spec that gives the retract gets it at every choice of sections, never a smaller
+    one: with 0.5 mm the sections at 55/90 % plan (the upper one's touches dropped), and
+    the lower one at 40 % has no safe circle (0.492 - 1.0 x cos 59° < 0), so the drill
+    point keeps one section: refused, not planned with 0.45 mm."""
+    spec = load_spec(_spec(model, tmp_path, "retract = 0.5\n"))
+    with pytest.raises(PlanningError, match="too few touches"):
+        plan_program(spec, runtime_variables=False)
 
 
 def test_the_drill_point_measured_on_the_virtual_cmm_is_the_planted_one(

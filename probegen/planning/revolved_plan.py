@@ -303,16 +303,22 @@ def _plan_safe(resolved: ResolvedRevolved, machine: MachineProfile, clearance_z:
                retract_only: float | None = None, view: View | None = None
                ) -> Rerouted | None:
     """The rerouted plan of one choice of sections with the first retract of
-    :func:`_retracts` (or ``retract_only``, then the one :func:`_fitting` gives these
-    sections where it is less) that keeps every touch, else the one that keeps the
-    most (None when none plans; the reasons go to ``errors``); with ``view`` the plan
-    is expressed in its frame (:func:`probegen.planning.tilted.express`) and
-    rerouted there (``sweeper`` is the view's)."""
+    :func:`_retracts` (or ``retract_only``, then, unless the spec gives the retract,
+    the one :func:`_fitting` gives these sections where it is less) that keeps every
+    touch, else the one that keeps the most (None when none plans; the reasons go to
+    ``errors``); with ``view`` the plan is expressed in its frame
+    (:func:`probegen.planning.tilted.express`) and rerouted there (``sweeper`` is the
+    view's)."""
     feature = resolved.spec
     sections = [section_of(feature.id, resolved.feature, s) for s in resolved.sections]
     best: Rerouted | None = None
-    retracts = _retracts(feature, machine, sections) if retract_only is None else tuple(
-        sorted({retract_only, _fitting(retract_only, machine, sections)}, reverse=True))
+    if retract_only is None:
+        retracts = _retracts(feature, machine, sections)
+    elif feature.retract is not None:  # the spec's retract is the only one
+        retracts = (retract_only,)
+    else:
+        retracts = tuple(sorted({retract_only, _fitting(retract_only, machine, sections)},
+                                reverse=True))
     for retract in retracts:
         try:
             plan = _plan_touches(sections, feature, machine, retract, clearance_z)
