@@ -26,15 +26,11 @@ from probegen.planning.actions import (
 )
 from probegen.planning.collision import ClearanceReport, Obstacle, check_program, obstacle_for
 from probegen.planning.freeform_spec import FreeformPlan, plan_freeform
+from probegen.planning.groups import grouped_nodes, with_index_moves
 from probegen.planning.identity import program_identity
 from probegen.planning.order import Stop, Tour, order_stops
 from probegen.planning.orient import needs_index, select_node, top_of
-from probegen.planning.oriented import (
-    OrientedPlan,
-    grouped_nodes,
-    plan_oriented,
-    with_index_moves,
-)
+from probegen.planning.oriented import OrientedPlan, plan_oriented
 from probegen.planning.planar import plan_planar, planar_nodes
 from probegen.planning.reroute import Sweeper
 from probegen.planning.revolved import Comparison

@@ -216,6 +216,13 @@ SMALL_BORE_CORE = 0.25
 """The safe circle of a bore too small for the usual retract keeps this radius, mm."""
 
 
+def _core_retract(section: Section, machine: MachineProfile) -> float:
+    """The largest retract that keeps a bore section's safe circle
+    :data:`SMALL_BORE_CORE` in radius, mm (a tilted section: along its surface)."""
+    return (section.radius / math.cos(section.tilt) - machine.probe.ball_radius
+            - SMALL_BORE_CORE)
+
+
 def _retracts(feature: RevolvedSpec, machine: MachineProfile,
               sections: list[Section]) -> tuple[float, ...]:
     """The retracts to try, largest first: the spec's alone when it gives one, else the
@@ -226,9 +233,9 @@ def _retracts(feature: RevolvedSpec, machine: MachineProfile,
         return (feature.retract,)
     low, usual = LEAST_RETRACT * machine.margin, machine.probe.approach
     out = [usual, max(FALLBACK_RETRACT, low)]
-    inner = [s.radius / math.cos(s.tilt) for s in sections if s.inner]
-    if inner:
-        out.append(min(inner) - machine.probe.ball_radius - SMALL_BORE_CORE)
+    cores = [_core_retract(s, machine) for s in sections if s.inner]
+    if cores:
+        out.append(min(cores))
     return tuple(sorted({d for d in out if low <= d <= usual}, reverse=True))
 
 
@@ -246,7 +253,7 @@ def _fitting(retract: float, machine: MachineProfile, sections: list[Section]) -
     for s in sections:
         if not s.inner:
             continue
-        fits = s.radius / math.cos(s.tilt) - machine.probe.ball_radius - SMALL_BORE_CORE
+        fits = _core_retract(s, machine)
         if fits >= low:
             out = min(out, fits)
         elif s.tilt != 0.0:
