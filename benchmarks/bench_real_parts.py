@@ -186,8 +186,9 @@ def is_fillet(f: Any) -> bool:
 def least_bore(machine: Any) -> float:
     """The smallest bore diameter the rack's smallest stylus measures, mm."""
     from probegen.planning.revolved_spec import smallest_bore
+    from probegen.planning.styli import smallest_stylus
 
-    smallest = min(machine.styli(), key=lambda s: s.ball_diameter)
+    smallest = smallest_stylus(machine)
     return float(smallest_bore(machine.with_stylus(smallest)))
 
 

@@ -195,6 +195,25 @@ def test_star_stylus_offset_and_a_cmm_tool_number(tmp_path: Path) -> None:
     assert m.rack[1].offset == (0.0, 10.0, 0.0) and m.rack[3].tool_number == 4
 
 
+def test_a_star_stylus_is_never_planned(tmp_path: Path) -> None:
+    """A star stylus (a tip offset) is read but never taken: the collision check models
+    a stylus along the probe axis, so the planner leaves it out of the rack's order and
+    a spec that forces it is refused, saying why."""
+    from probegen.planning.styli import rack_order, stylus_named
+
+    profile = edited(tmp_path, FIVE, ('label = "D2"', 'label = "STAR1"\noffset = [0.0, 10.0, 0.0]'))
+    m = load_profile(profile)
+    assert "STAR1" in [s.label for s in m.styli()]
+    assert [s.label for s in rack_order(m)] == ["D6", "D6L", "D3", "D1"]
+    with pytest.raises(SpecError, match=r"where: stylus STAR1 .*\(a star stylus\).*: expected "
+                                        r"one of D6, D6L, D3, D1"):
+        stylus_named(m, "STAR1", "where")
+    with pytest.raises(SpecError, match=r"feature\[0\]\.stylus: stylus STAR1 \(.*"
+                                        r"\[\[probe\.stylus\]\]\) has a tip offset off the "
+                                        r"probe axis \(a star stylus\)"):
+        load_spec(spec_with(tmp_path, "STAR1", profile))
+
+
 def test_rotation_problem() -> None:
     assert rotation_problem(frames.from_euler_zxz(30.0, 60.0, -45.0)) == ""
     assert "mirror" in rotation_problem(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0)))

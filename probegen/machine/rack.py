@@ -366,3 +366,15 @@ def rotation_problem(r: frames.Rotation) -> str:
     if abs(det - 1.0) > ROTATION_TOLERANCE:
         return f"determinant {det:.6g}" + (": a mirror image" if det < 0 else "")
     return ""
+
+
+STAR_REFUSAL = ("has a tip offset off the probe axis (a star stylus): probegen plans "
+                "and collision-checks only styli along the probe axis (the ball on the "
+                "axis, the shank and body above it), so it never takes this one")
+"""Why a star stylus is never planned: a collision check of the wrong geometry would
+clear moves that crash the star's other arms or its offset tip."""
+
+
+def is_star(s: Stylus) -> bool:
+    """Whether ``s`` has a tip offset off the probe axis."""
+    return any(c != 0.0 for c in s.offset)

@@ -18,6 +18,7 @@ from typing import TypeVar
 
 from probegen.errors import PlanningError, SpecError
 from probegen.machine.profile import MachineProfile, Stylus
+from probegen.machine.rack import STAR_REFUSAL, is_star
 
 T = TypeVar("T")
 
@@ -29,10 +30,13 @@ error and its label (:func:`own_reason` cuts there)."""
 
 
 def rack_order(machine: MachineProfile) -> tuple[Stylus, ...]:
-    """Every stylus of ``machine`` in the order they are tried: largest ball first, then
-    shorter, then thicker shank, then label (repeatable)."""
-    return tuple(sorted(machine.styli(), key=lambda s: (-s.ball_diameter, s.length,
-                                                        -s.shank_diameter, s.label)))
+    """Every stylus of ``machine`` the planner takes, in the order they are tried:
+    largest ball first, then shorter, then thicker shank, then label (repeatable).  A
+    star stylus (a tip ``offset`` off the probe axis) is not among them
+    (:data:`probegen.machine.rack.STAR_REFUSAL`)."""
+    return tuple(sorted((s for s in machine.styli() if not is_star(s)),
+                        key=lambda s: (-s.ball_diameter, s.length, -s.shank_diameter,
+                                       s.label)))
 
 
 def smallest_stylus(machine: MachineProfile) -> Stylus:
@@ -45,10 +49,15 @@ def stylus_named(machine: MachineProfile, label: str, where: str) -> Stylus:
     """The stylus labelled ``label``.
 
     Raises:
-        SpecError: no stylus of the profile has it; names ``where`` and the labels.
+        SpecError: no stylus of the profile has it, or a star stylus has it
+            (:data:`probegen.machine.rack.STAR_REFUSAL`); names ``where`` and the labels.
     """
     for s in machine.styli():
         if s.label == label:
+            if is_star(s):
+                raise SpecError(f"{where}: stylus {label} ({machine.source}: "
+                                f"[[probe.stylus]]) {STAR_REFUSAL}: expected one of "
+                                f"{', '.join(t.label for t in rack_order(machine))}")
             return s
     labels = ", ".join(s.label for s in rack_order(machine))
     raise SpecError(f"{where}: expected a stylus of the machine's rack ({labels}; "
