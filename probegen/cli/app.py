@@ -100,7 +100,9 @@ def _simulate(args: argparse.Namespace, link: object | None) -> int:
     text = _program_text(args.program)
     probes = sum(text.upper().count(word) for word in ("G31", "PTMEAS", "G38."))
     with Bar("simulating", probes, unit="touches") as bar:
-        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack, **options)
+        vm = VirtualMachine(placed, probe, kin, on_touch=bar, rack=rack, start=profile.stylus,
+                            body=(profile.probe.body_diameter, profile.probe.body_length),
+                            **options)
         result = run_text(text, vm, kind=program_kind(args.program), source=args.program,
                           work_offset=work, home=(HOME[0], HOME[1], HOME[2] + work[2]),
                           control=args.control or program_control(args.program),

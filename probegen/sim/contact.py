@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -64,6 +64,9 @@ from probegen.sim.contact_parts import (
     next_step,
 )
 from probegen.sim.form import BoundForm, FormError
+
+if TYPE_CHECKING:
+    from probegen.sim.stem import Stem
 
 MESH_TOLERANCE = 0.02
 """Chordal deviation of the tracing mesh, mm.  The mesh only finds where to look; the
@@ -112,6 +115,7 @@ class PlacedPart:
     def __init__(self, solver: _Solver, rotation: ArrayLike | None,
                  translation: ArrayLike | None) -> None:
         self._solver = solver
+        self._stem: Stem | None = None
         self.rotation = as_rotation(rotation)
         self.translation = as_vector(translation if translation is not None else np.zeros(3),
                                    "translation")
@@ -153,6 +157,19 @@ class PlacedPart:
             raise ProbegenError(f"spheres: expected k centres and k positive radii, found "
                                 f"{len(c)} centres and radii {r.tolist()}")
         return cls(_SphereSolver(c, r), rotation, translation)
+
+    @property
+    def stem(self) -> Stem | None:
+        """The test of the probe's shank and body against the part's mesh
+        (:mod:`probegen.sim.stem`), built when first asked for; None for analytic
+        spheres (no mesh: the ball alone)."""
+        if not isinstance(self._solver, _ModelSolver):
+            return None
+        if self._stem is None:
+            from probegen.sim.stem import Stem
+
+            self._stem = Stem(self._solver.mesh)
+        return self._stem
 
     def to_part(self, points: ArrayLike) -> FloatArray:
         """Work-frame points ``(..., 3)`` in the part frame."""
@@ -277,6 +294,7 @@ class _ModelSolver(_Solver):
         self.low = np.array([f.bbox_min for f in model.faces])
         self.high = np.array([f.bbox_max for f in model.faces])
         mesh = part.mesh(mesh_tolerance)
+        self.mesh = mesh
         self.forms = {f.face - 1: BoundForm(f, cad.face_by_id(model, f.face)) for f in forms}
         # a perturbed face lies up to its limit off the mesh: every bound allows for it
         self.deviation = MESH_DEVIATION_FACTOR * mesh_tolerance + max(

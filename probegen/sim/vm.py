@@ -62,6 +62,7 @@ from probegen.machine.profile import Head, Stylus
 from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import ContactHit, PlacedPart
 from probegen.sim.macrob.tilt import table_rotation
+from probegen.sim.stem import probe_cylinders
 
 Vec3 = tuple[float, float, float]
 
@@ -79,6 +80,10 @@ HEAD_INDEX = 9014
 """Alarm number of a DMIS sensor whose head angles the CMM's head cannot index."""
 SENSOR_BALL = 1e-4
 """Largest difference, mm, between a DMIS sensor's ball diameter and a rack stylus's."""
+STEM = True
+"""Whether the shank and the probe body are checked (:mod:`probegen.sim.stem`) where the
+machine knows them; False: the ball alone (the benchmark's baseline,
+``benchmarks/bench_stem.py``)."""
 ROTARY_STEP = 0.25
 """Largest rotary step (deg) between the points a rotary move is checked at; the chord
 misses the ball's arc by at most ``L·(1 − cos(step/2))``: 0.7 µm at L = 300 mm."""
@@ -119,6 +124,13 @@ class VirtualMachine:
     """The tilt axis's travel, deg (``[tilt] tilt_range``), or None: not limited."""
     table: dict[str, float] = field(default_factory=dict)
     """Trunnion table angles, deg (G53.1); empty: at zero."""
+    start: Stylus | None = None
+    """The stylus in the probe when the program starts (the profile's ``[probe]``
+    stylus): its shank, and that of every stylus taken after it, is checked along every
+    move with the probe body (:mod:`probegen.sim.stem`); None: the ball alone."""
+    body: tuple[float, float] = (0.0, 0.0)
+    """The probe body's diameter and length, mm (``[probe] body_diameter``,
+    ``body_length``); (0, 0): no body checked."""
 
     @property
     def ball_radius(self) -> float:
@@ -169,10 +181,14 @@ class VirtualMachine:
         swept = max(abs(end[a] - start[a]) for a in end)
         steps = max(1, int(np.ceil(swept / ROTARY_STEP)))
         ball = self._linear(np.asarray(at, dtype=np.float64))
-        path = [self._on_table(ball, {a: start[a] + k / steps * (end[a] - start[a])
-                                      for a in end}) for k in range(steps + 1)]
-        for previous, current in zip(path[:-1], path[1:], strict=True):
-            self._clear_actual(previous, current, "TABLE TILT")
+        turns = [{a: start[a] + k / steps * (end[a] - start[a]) for a in end}
+                 for k in range(steps + 1)]
+        path = [self._on_table(ball, t) for t in turns]
+        axes = [self._probe_axis(t) for t in turns]
+        for k in range(steps):
+            a0, a1 = axes[k], axes[k + 1]
+            self._clear_actual(path[k], path[k + 1], "TABLE TILT",
+                               None if a0 is None or a1 is None else (a0, a1))
         self.table = dict(end)
 
     def _on_table(self, m: np.ndarray, angles: dict[str, float]) -> np.ndarray:
@@ -237,13 +253,50 @@ class VirtualMachine:
     def _clear(self, start: Vec3, end: Vec3, what: str) -> None:
         self._clear_actual(self.actual(start), self.actual(end), what)
 
-    def _clear_actual(self, start: np.ndarray, end: np.ndarray, what: str) -> None:
+    def _clear_actual(self, start: np.ndarray, end: np.ndarray, what: str,
+                      axes: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         a, b = self._leave_contact(start, end)
         hit = self.part.first_contact(a, b, self.ball_radius)
         if hit is not None:
             x, y, z = (float(v) for v in hit.point)
             raise SimAlarm(COLLISION_ALARM, f"STYLUS COLLISION ({what}) WITH FACE "
                            f"{hit.face_id} AT X{x:.4f} Y{y:.4f} Z{z:.4f}")
+        self._clear_stem(start, end, what, axes)
+
+    def _probe_axis(self, table: dict[str, float] | None = None) -> np.ndarray | None:
+        """The probe's axis (unit, from the ball towards the head) in the table frame,
+        with the trunnion table at ``table`` (default: where it is); None where the
+        stem is not checked (the B/C head machine, whose head tilts with B)."""
+        if self.rotary:
+            return None
+        angles = self.table if table is None else table
+        if any(angles.values()):  # the spindle vertical, the part turned with the table
+            return np.asarray(np.array([0.0, 0.0, 1.0]) @ np.asarray(table_rotation(angles)))
+        return np.asarray(self.stylus_axis, dtype=np.float64)
+
+    def _clear_stem(self, start: np.ndarray, end: np.ndarray, what: str,
+                    axes: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        """Alarm 9100 if the shank or the probe body meets the part while the ball's
+        centre moves from ``start`` to ``end`` (table frame) with the probe along
+        ``axes`` (at the start and the end; default: the axis as it stands)."""
+        stylus = self.stylus if self.stylus is not None else self.start
+        stem = self.part.stem if stylus is not None and STEM else None
+        if stem is None or stylus is None:
+            return
+        if axes is None:
+            axis = self._probe_axis()
+            if axis is None:
+                return
+            axes = (axis, axis)
+        rotation = self.part.rotation
+        cut = stem.cut(self.part.to_part(start), self.part.to_part(end),
+                       axes[0] @ rotation, axes[1] @ rotation,
+                       probe_cylinders(stylus.ball_radius, stylus.shank_diameter,
+                                       stylus.length, *self.body))
+        if cut is not None:
+            x, y, z = (float(v) for v in start)
+            raise SimAlarm(COLLISION_ALARM, f"{cut[0]} COLLISION ({what}) WITH FACE {cut[1]}"
+                           f" (THE BALL FROM X{x:.4f} Y{y:.4f} Z{z:.4f})")
 
     def _leave_contact(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Skip the first part of a move that backs a touching ball away from the part.
@@ -284,6 +337,8 @@ class VirtualMachine:
         if length == 0.0:
             return None
         hit = self.part.first_contact(self.actual(a), self.actual(b), self.ball_radius)
+        self._clear_stem(self.actual(a), self.actual(b) if hit is None else hit.centre,
+                         "PROBING")
         if hit is None:
             return None
         delay = float(self.probe.noisy_offset(self.probe_frame((b - a) / length)))
