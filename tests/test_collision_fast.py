@@ -173,6 +173,31 @@ def test_height_map_bounds_the_mesh(sample: Near) -> None:
         assert not inside.any() or pts[inside, 2].max() <= h
 
 
+@settings(max_examples=examples(40), deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 40), size=st.floats(0.05, 30.0))
+def test_large_triangles_are_rasterised_as_small_ones(seed: int, n: int, size: float) -> None:
+    """A triangle whose XY box covers more than ``BIG`` cells is rasterised on its own,
+    with its plane worked out once (``heightmap._planes``); every cell gets exactly the
+    value the chunked path of small triangles (``HeightMap._bound``) gives it: random
+    triangles, some vertical, rasterised with every triangle large and with none."""
+    from probegen.planning import heightmap
+
+    rng = np.random.default_rng(seed)
+    vertices = rng.uniform(-size, size, (3 * n, 3))
+    vertices[:3, :2] = vertices[0, :2] + rng.uniform(0.0, 1.0, (3, 1)) * rng.normal(size=2)
+    faces = np.arange(3 * n, dtype=np.int64).reshape(n, 3)
+    maps = []
+    for big in (-1, heightmap.CHUNK):  # every triangle large, then none
+        saved = heightmap.BIG
+        heightmap.BIG = big
+        try:
+            maps.append(heightmap.HeightMap(vertices, faces).height)
+        finally:
+            heightmap.BIG = saved
+    assert np.array_equal(maps[0], maps[1])
+    assert np.isfinite(maps[0]).any()
+
+
 def _feature(**changes: Any) -> tuple[FreeformSpec, Spec]:
     f = SPEC.features[0]
     assert isinstance(f, FreeformSpec)

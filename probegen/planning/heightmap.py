@@ -94,12 +94,24 @@ class HeightMap:
         out = np.full(self.shape, -np.inf)
         lo, hi = self._cells(tri)
         counts = (hi - lo + 1).prod(axis=1)
-        for t in np.flatnonzero(counts > BIG):
-            i = np.arange(lo[t, 0], hi[t, 0] + 1)
-            j = np.arange(lo[t, 1], hi[t, 1] + 1)
-            block = self._bound(tri[t:t + 1], i[:, None], j[None, :])
-            view = out[i[0]:i[-1] + 1, j[0]:j[-1] + 1]
-            np.maximum(view, block, out=view)
+        big = np.flatnonzero(counts > BIG)
+        if len(big):
+            top, flat, grad = _planes(tri[big])
+            rising = grad > 0
+            h, o = self.cell, self.origin
+            for m, t in enumerate(big):  # the sums of _bound, on scalars of this triangle
+                i = np.arange(lo[t, 0], hi[t, 0] + 1)
+                j = np.arange(lo[t, 1], hi[t, 1] + 1)
+                x0, y0, z0 = tri[t, 0]
+                if flat[m]:
+                    cx = o[0] + h * (i + rising[m, 0])
+                    cy = o[1] + h * (j + rising[m, 1])
+                    plane = (z0 + grad[m, 0] * (cx - x0))[:, None] + grad[m, 1] * (cy - y0)
+                    block = np.minimum(plane, top[m]) + FCL_SLACK
+                else:
+                    block = top[m] + FCL_SLACK
+                view = out[i[0]:i[-1] + 1, j[0]:j[-1] + 1]
+                np.maximum(view, block, out=view)
         small = tri[counts <= BIG]
         for first in range(0, len(small), CHUNK // BIG):
             part = small[first:first + CHUNK // BIG]
@@ -124,11 +136,7 @@ class HeightMap:
         plane's highest corner of the cell (the upper corner along a rising gradient;
         the highest vertex alone for a vertical triangle)."""
         h, o = self.cell, self.origin
-        top = tri[:, :, 2].max(axis=1)
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        flat = np.abs(n[:, 2]) > 1e-9 * np.linalg.norm(n, axis=1)
-        grad = np.zeros((len(tri), 2))
-        grad[flat] = -n[flat, :2] / n[flat, 2:3]
+        top, flat, grad = _planes(tri)
         if len(tri) == 1:
             top, flat, grad, v0 = top[0], flat[0], grad[0], tri[0, 0]
         else:
@@ -180,6 +188,17 @@ class HeightMap:
         out = np.full(len(a), -np.inf)
         np.maximum.at(out, seg, value)
         return out
+
+
+def _planes(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per triangle of ``tri`` (m, 3, 3): its highest vertex's z, whether it is not
+    vertical, and its plane's gradient (dz/dx, dz/dy; zero for a vertical one)."""
+    top = tri[:, :, 2].max(axis=1)
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    flat = np.abs(n[:, 2]) > 1e-9 * np.linalg.norm(n, axis=1)
+    grad = np.zeros((len(tri), 2))
+    grad[flat] = -n[flat, :2] / n[flat, 2:3]
+    return top, flat, grad
 
 
 def shift_max(out: np.ndarray, run: np.ndarray, a: int) -> None:
