@@ -86,3 +86,33 @@ def test_the_prism_is_inscribed_in_the_cylinder() -> None:
     assert across == pytest.approx(1.0, abs=1e-12)
     assert sorted(set(np.round(along, 9))) == pytest.approx([1.5, 40.0])
     assert 1.0 - math.cos(math.pi / SIDES) < 0.0022
+
+
+LONG = Stylus("D3L", 3.0, 2.5, 100.0, 0)
+SENSORS = """DMISMN/'STEM',05.3
+UNITS/MM,ANGDEC
+S(D3)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,40,3
+S(D3L)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,3
+SNSLCT/S({label})
+GOTO/50,50,120
+GOTO/50,50,5
+GOTO/50,50,120
+ENDFIL
+"""
+
+
+@pytest.mark.parametrize(("label", "alarm"), [("D3L", False), ("D3", True)])
+def test_the_cmm_takes_the_stylus_of_the_sensor_s_length(placed: PlacedPart, label: str,
+                                                         alarm: bool) -> None:
+    """Two styli of one ball (D3 40 mm, D3L 100 mm): SNSLCT takes the one whose length
+    the sensor's SNSDEF gives.  The ball 5 mm above the bore's bottom end: D3's 60 mm
+    body starts 45 mm up, inside the D50 bore (alarm); D3L's 105 mm up, above the part."""
+    from probegen.sim.vm import run_text
+
+    machine = VirtualMachine(placed, ProbeModel(1.5), rack=(D3, LONG), start=D3,
+                             body=(60.0, 50.0))
+    result = run_text(SENSORS.format(label=label), machine, kind="dmis")
+    assert machine.stylus is not None and machine.stylus.label == label
+    assert (result.alarm is not None) is alarm
+    assert not alarm or re.search(r"^9100 BODY COLLISION \(GOTO\) WITH FACE [1-9]",
+                                  result.alarm or "")

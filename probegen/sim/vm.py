@@ -154,14 +154,19 @@ class VirtualMachine:
                            "OFFSET OF ANOTHER TOOL")
 
     def select_sensor(self, label: str, ball_radius: float, axis: tuple[float, float, float],
-                      angles: tuple[float, float] | None = None) -> None:
-        """A DMIS ``SNSLCT``: take the rack's stylus of ``ball_radius`` (mm) and turn the
-        head so that the stylus points along ``-axis`` (``axis``: unit, from the ball
-        towards the head, work frame) at head ``angles`` (A, B, deg).  Alarm
-        :data:`UNKNOWN_TOOL` when no stylus of the rack has that ball, :data:`HEAD_INDEX`
-        when the angles are outside the head's ranges or between its index steps."""
-        found = next((s for s in self.rack
-                      if abs(s.ball_radius - ball_radius) <= SENSOR_BALL / 2.0), None)
+                      angles: tuple[float, float] | None = None,
+                      length: float | None = None) -> None:
+        """A DMIS ``SNSLCT``: take the rack's stylus of ``ball_radius`` (mm; of two with
+        that ball, the one of the sensor's ``length`` where one has it, else the first)
+        and turn the head so that the stylus points along ``-axis`` (``axis``: unit,
+        from the ball towards the head, work frame) at head ``angles`` (A, B, deg).
+        Alarm :data:`UNKNOWN_TOOL` when no stylus of the rack has that ball,
+        :data:`HEAD_INDEX` when the angles are outside the head's ranges or between its
+        index steps."""
+        balls = [s for s in self.rack if abs(s.ball_radius - ball_radius) <= SENSOR_BALL / 2.0]
+        found = next((s for s in balls
+                      if length is not None and abs(s.length - length) <= SENSOR_BALL),
+                     balls[0] if balls else None)
         if found is None:
             raise SimAlarm(UNKNOWN_TOOL, f"SENSOR S({label}) D{2 * ball_radius:g}: NO STYLUS "
                            f"OF THIS BALL IN THE RACK ({_rack(self.rack)})")

@@ -107,6 +107,9 @@ def do_snsdef(state: VmState, st: Statement) -> None:
         raise state.error(f"SNSDEF: the ball diameter must be >= 0, found {diameter}")
     state.sensors[st.label.name] = diameter
     state.sensor_axes[st.label.name] = _stylus_axis(state, st.params)
+    length = st.params[-2] if len(st.params) > 2 else None
+    state.sensor_lengths[st.label.name] = (
+        state.length(length, "SNSDEF length") if isinstance(length, int | float) else None)
     state.foreign.pop(st.label.name, None)
     if _head(state) is None and "INDEX" in st.params[1:3] and not _straight_down(st.params):
         state.notes.append((st.line, st.text, "an indexed probe head: the machine tool's "
@@ -197,7 +200,8 @@ def do_snslct(state: VmState, st: Statement) -> None:
             raise NotExecutable(f"S({name}): the stylus direction of this SNSDEF form (a "
                                 "CART or VEC sensor that is not vertical, or a POL sensor "
                                 "with a mount vector that is not vertical)")
-        select(name, diameter / 2.0, *axis)  # type: ignore[operator]
+        select(name, diameter / 2.0, *axis,  # type: ignore[operator]
+               length=state.sensor_lengths.get(name))
         state.radius = diameter / 2.0
         return
     if abs(diameter / 2.0 - machine) > SENSOR_MATCH:

@@ -131,6 +131,8 @@ class VmState:
     sensor_axes: dict[str, tuple[tuple[float, float, float], tuple[float, float] | None] | None] \
         = field(default_factory=dict)
     """Per sensor: its stylus axis and head angles (``sensors.Axis``), or None."""
+    sensor_lengths: dict[str, float | None] = field(default_factory=dict)
+    """Per sensor: the length its SNSDEF gives (mm; the second-last number), or None."""
     foreign: dict[str, ForeignSensor] = field(default_factory=dict)
     selected_foreign: ForeignSensor | None = None
     radius: float | None = None
