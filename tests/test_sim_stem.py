@@ -18,7 +18,7 @@ from probegen.machine.probe_model import ProbeModel
 from probegen.machine.profile import Stylus
 from probegen.sim.alarms import SimAlarm
 from probegen.sim.contact import PlacedPart
-from probegen.sim.stem import SIDES, Stem, probe_cylinders
+from probegen.sim.stem import SIDES, prism, probe_cylinders
 from probegen.sim.vm import COLLISION_ALARM, VirtualMachine
 
 D3 = Stylus("D3", 3.0, 2.0, 40.0, 0)
@@ -75,12 +75,9 @@ def test_the_prism_is_inscribed_in_the_cylinder() -> None:
     """The checked prism's corners lie on the cylinder; its faces at most
     r·(1 - cos(π/SIDES)) inside it: the check never alarms on a move the true cylinder
     clears."""
-    import trimesh
-
-    stem = Stem(trimesh.creation.box((1.0, 1.0, 1.0)))
     (shank,) = probe_cylinders(1.5, 2.0, 40.0, 0.0, 0.0)
     axis = np.array([1.0, 2.0, 2.0]) / 3.0
-    corners = stem._prism(np.zeros(3), axis, shank)
+    corners = prism(np.zeros(3), axis, shank)
     along = corners @ axis
     across = np.linalg.norm(corners - np.outer(along, axis), axis=1)
     assert across == pytest.approx(1.0, abs=1e-12)

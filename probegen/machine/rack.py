@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from probegen.errors import SpecError
@@ -378,3 +379,11 @@ clear moves that crash the star's other arms or its offset tip."""
 def is_star(s: Stylus) -> bool:
     """Whether ``s`` has a tip offset off the probe axis."""
     return any(c != 0.0 for c in s.offset)
+
+
+def star_refusal(styli: Iterable[Stylus], label: str, source: object) -> str | None:
+    """Why the stylus ``label`` of ``styli`` (a profile's, read from ``source``) is not
+    taken when it is a star stylus (:data:`STAR_REFUSAL`), else None."""
+    if any(s.label == label and is_star(s) for s in styli):
+        return f"stylus {label} ({source}: [[probe.stylus]]) {STAR_REFUSAL}"
+    return None

@@ -96,15 +96,6 @@ def grouped_nodes(plans: Sequence[OrientedPlan], machine: MachineProfile,
 # ------------------------------------------------------- the route of a change
 
 
-@dataclass(frozen=True, slots=True)
-class _Where:
-    """The probe's last known position while walking a body: work coordinates (None when
-    not known exactly: a run-time coordinate or a move relative to a local frame)."""
-
-    work: np.ndarray | None
-    frame: ir.Orient | None
-
-
 def _target(move: ir.Move, frame: ir.Orient | None, local: int) -> np.ndarray | None:
     """A move's target in work coordinates, None when it is not a plain point of the
     frame in force (run-time coordinates, inside a local frame)."""

@@ -137,10 +137,7 @@ class HeightMap:
         the highest vertex alone for a vertical triangle)."""
         h, o = self.cell, self.origin
         top, flat, grad = _planes(tri)
-        if len(tri) == 1:
-            top, flat, grad, v0 = top[0], flat[0], grad[0], tri[0, 0]
-        else:
-            v0 = tri[:, 0].T
+        v0 = tri[:, 0].T
         cx = o[0] + h * (i + (grad[..., 0] > 0))
         cy = o[1] + h * (j + (grad[..., 1] > 0))
         plane = v0[2] + grad[..., 0] * (cx - v0[0]) + grad[..., 1] * (cy - v0[1])

@@ -18,7 +18,7 @@ from typing import TypeVar
 
 from probegen.errors import PlanningError, SpecError
 from probegen.machine.profile import MachineProfile, Stylus
-from probegen.machine.rack import STAR_REFUSAL, is_star
+from probegen.machine.rack import is_star, star_refusal
 
 T = TypeVar("T")
 
@@ -52,12 +52,12 @@ def stylus_named(machine: MachineProfile, label: str, where: str) -> Stylus:
         SpecError: no stylus of the profile has it, or a star stylus has it
             (:data:`probegen.machine.rack.STAR_REFUSAL`); names ``where`` and the labels.
     """
+    star = star_refusal(machine.styli(), label, machine.source)
+    if star is not None:
+        raise SpecError(f"{where}: {star}: expected one of "
+                        f"{', '.join(t.label for t in rack_order(machine))}")
     for s in machine.styli():
         if s.label == label:
-            if is_star(s):
-                raise SpecError(f"{where}: stylus {label} ({machine.source}: "
-                                f"[[probe.stylus]]) {STAR_REFUSAL}: expected one of "
-                                f"{', '.join(t.label for t in rack_order(machine))}")
             return s
     labels = ", ".join(s.label for s in rack_order(machine))
     raise SpecError(f"{where}: expected a stylus of the machine's rack ({labels}; "

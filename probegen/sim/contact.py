@@ -166,9 +166,7 @@ class PlacedPart:
         if not isinstance(self._solver, _ModelSolver):
             return None
         if self._stem is None:
-            from probegen.sim.stem import Stem
-
-            self._stem = Stem(self._solver.mesh)
+            self._stem = self._solver.stem()
         return self._stem
 
     def to_part(self, points: ArrayLike) -> FloatArray:
@@ -294,7 +292,6 @@ class _ModelSolver(_Solver):
         self.low = np.array([f.bbox_min for f in model.faces])
         self.high = np.array([f.bbox_max for f in model.faces])
         mesh = part.mesh(mesh_tolerance)
-        self.mesh = mesh
         self.forms = {f.face - 1: BoundForm(f, cad.face_by_id(model, f.face)) for f in forms}
         # a perturbed face lies up to its limit off the mesh: every bound allows for it
         self.deviation = MESH_DEVIATION_FACTOR * mesh_tolerance + max(
@@ -307,7 +304,14 @@ class _ModelSolver(_Solver):
         bvh.endModel()
         self._fcl = fcl
         self._mesh = fcl.CollisionObject(bvh, fcl.Transform())
+        self._bounds = np.asarray(mesh.bounds, dtype=np.float64)
         self._balls: dict[float, Any] = {}
+
+    def stem(self) -> Stem:
+        """The test of the probe's shank and body on this solver's own mesh tree."""
+        from probegen.sim.stem import Stem
+
+        return Stem(self._mesh, self.face_ids, self._bounds[0], self._bounds[1])
 
     # ---------------------------------------------------------------- mesh tracing
 

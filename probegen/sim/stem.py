@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import fcl
 import numpy as np
-import trimesh
 from scipy.spatial import ConvexHull
 
 SIDES = 48
@@ -51,20 +51,16 @@ def probe_cylinders(ball_radius: float, shank_diameter: float, length: float,
 
 
 class Stem:
-    """The part's mesh (part frame) as a bounding-volume tree, and the test of a cylinder
-    along the probe swept along a straight move."""
+    """The test of a cylinder along the probe swept along a straight move against the
+    part's mesh (part frame) as a bounding-volume tree."""
 
-    def __init__(self, mesh: trimesh.Trimesh) -> None:
-        self._face_ids = np.asarray(mesh.metadata.get("face_ids", np.zeros(len(mesh.faces))))
-        model = fcl.BVHModel()
-        model.beginModel(len(mesh.vertices), len(mesh.faces))
-        model.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
-                          np.asarray(mesh.faces, dtype=np.int64))
-        model.endModel()
-        self._part = fcl.CollisionObject(model, fcl.Transform())
-        self._low, self._high = np.asarray(mesh.bounds, dtype=np.float64)
-        angles = np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False)
-        self._ring = np.column_stack([np.cos(angles), np.sin(angles)])
+    def __init__(self, part: Any, face_ids: np.ndarray, low: np.ndarray,
+                 high: np.ndarray) -> None:
+        """``part``: the mesh's fcl collision object (the contact solver's own, built
+        once per part); ``face_ids``: the 0-based face of each triangle; ``low``,
+        ``high``: a box holding the mesh."""
+        self._part, self._face_ids = part, face_ids
+        self._low, self._high = low, high
 
     def cut(self, a: np.ndarray, b: np.ndarray, axis_a: np.ndarray, axis_b: np.ndarray,
             cylinders: tuple[Cylinder, ...]) -> tuple[str, int] | None:
@@ -73,22 +69,11 @@ class Stem:
         (unit, from the ball towards the head), and the face it meets (1-based; 0: not
         known); None when all stay clear."""
         for c in cylinders:
-            points = np.vstack([self._prism(a, axis_a, c), self._prism(b, axis_b, c)])
+            points = np.vstack([prism(a, axis_a, c), prism(b, axis_b, c)])
             face = self._meets(points)
             if face is not None:
                 return c.name, face
         return None
-
-    def _prism(self, centre: np.ndarray, axis: np.ndarray, c: Cylinder) -> np.ndarray:
-        """The corners of the inscribed prism of ``c`` with the ball's centre at
-        ``centre`` and the probe along ``axis``."""
-        u = np.asarray(axis, dtype=np.float64)
-        helper = np.array([1.0, 0.0, 0.0]) if abs(u[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        e1 = np.cross(u, helper)
-        e1 /= float(np.linalg.norm(e1))
-        e2 = np.cross(u, e1)
-        ring = c.radius * (self._ring[:, :1] * e1 + self._ring[:, 1:] * e2)
-        return np.vstack([centre + c.low * u + ring, centre + c.high * u + ring])
 
     def _meets(self, points: np.ndarray) -> int | None:
         """The face (1-based) of a triangle the convex hull of ``points`` meets, or None."""
@@ -110,3 +95,20 @@ class Stem:
         # the triangle's index is the contact's b1 or b2 (fcl orders mesh before shape)
         triangle = max(result.contacts[0].b1, result.contacts[0].b2) if result.contacts else -1
         return int(self._face_ids[triangle]) + 1 if 0 <= triangle < len(self._face_ids) else 0
+
+
+_RING = np.column_stack([np.cos(np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False)),
+                         np.sin(np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False))])
+"""The unit :data:`SIDES`-gon's corners (cos, sin)."""
+
+
+def prism(centre: np.ndarray, axis: np.ndarray, c: Cylinder) -> np.ndarray:
+    """The corners of the inscribed prism of ``c`` with the ball's centre at ``centre``
+    and the probe along ``axis`` (unit)."""
+    u = np.asarray(axis, dtype=np.float64)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(u[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(u, helper)
+    e1 /= float(np.linalg.norm(e1))
+    e2 = np.cross(u, e1)
+    ring = c.radius * (_RING[:, :1] * e1 + _RING[:, 1:] * e2)
+    return np.vstack([centre + c.low * u + ring, centre + c.high * u + ring])

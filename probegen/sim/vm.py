@@ -341,9 +341,9 @@ class VirtualMachine:
         length = float(np.linalg.norm(b - a))
         if length == 0.0:
             return None
-        hit = self.part.first_contact(self.actual(a), self.actual(b), self.ball_radius)
-        self._clear_stem(self.actual(a), self.actual(b) if hit is None else hit.centre,
-                         "PROBING")
+        from_, to = self.actual(a), self.actual(b)
+        hit = self.part.first_contact(from_, to, self.ball_radius)
+        self._clear_stem(from_, to if hit is None else hit.centre, "PROBING")
         if hit is None:
             return None
         delay = float(self.probe.noisy_offset(self.probe_frame((b - a) / length)))

@@ -82,7 +82,7 @@ from probegen.errors import ProbegenError, SpecError, did_you_mean
 from probegen.files import Table, load_toml
 from probegen.geometry.uncertainty import DECISION_RULES
 from probegen.machine.profile import MachineProfile, load_profile
-from probegen.machine.rack import STAR_REFUSAL, dialect_problem, is_star
+from probegen.machine.rack import dialect_problem, star_refusal
 from probegen.spec.actions import (
     FORM_METHODS,
     PLANAR_KINDS,
@@ -468,10 +468,9 @@ def _stylus(t: Table, machine: MachineProfile | None) -> str | None:
     label = t.get_str("stylus")
     if label is None or machine is None:
         return label
-    star = [s for s in machine.styli() if s.label == label and is_star(s)]
-    if star:
-        raise SpecError(f"{t.where('stylus')}: stylus {label} ({machine.source}: "
-                        f"[[probe.stylus]]) {STAR_REFUSAL}")
+    star = star_refusal(machine.styli(), label, machine.source)
+    if star is not None:
+        raise SpecError(f"{t.where('stylus')}: {star}")
     labels = [s.label for s in machine.styli()]
     if label not in labels:
         raise SpecError(f"{t.where('stylus')}: expected a stylus of the machine's rack "
