@@ -53,6 +53,8 @@ def child(model: str, key: str) -> dict[str, Any]:
     from probegen.cli.plan import program_text
     from probegen.dialects import get_dialect
     from probegen.machine.profile import load_profile
+    from probegen.planning import heightmap
+    from probegen.planning.collision import MeshObstacle
     from probegen.planning.setups import all_revolved_setups, plan_setups
 
     probegen.cli.progress.ENABLED = False
@@ -60,11 +62,28 @@ def child(model: str, key: str) -> dict[str, Any]:
     sample, dialect = PROFILES[key]
     machine = load_profile(REPO / sample)
     part = cad.load_part(model)
-    t0 = time.perf_counter()
-    spec, notes = all_revolved_setups(part, machine)
-    setups = plan_setups(spec, runtime_variables=get_dialect(dialect).RUNTIME_VARIABLES,
-                         part=part)
-    plan_s = time.perf_counter() - t0
+    built = {"maps": 0, "trees": 0}
+    map_init, tree_build = heightmap.HeightMap.__init__, MeshObstacle._build
+
+    def counted_map(*args: Any, **kwargs: Any) -> None:
+        built["maps"] += 1
+        map_init(*args, **kwargs)
+
+    def counted_tree(self: Any) -> Any:
+        built["trees"] += 1
+        return tree_build(self)
+
+    heightmap.HeightMap.__init__ = counted_map  # type: ignore[method-assign]
+    MeshObstacle._build = counted_tree  # type: ignore[method-assign]
+    try:
+        t0, c0 = time.perf_counter(), time.process_time()
+        spec, notes = all_revolved_setups(part, machine)
+        setups = plan_setups(spec, runtime_variables=get_dialect(dialect).RUNTIME_VARIABLES,
+                             part=part)
+        plan_s, plan_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+    finally:
+        heightmap.HeightMap.__init__ = map_init  # type: ignore[method-assign]
+        MeshObstacle._build = tree_build  # type: ignore[method-assign]
     digest = hashlib.sha256()
     for _setup, planned in setups:
         digest.update(program_text(dialect, planned, notes).encode("utf-8"))
@@ -73,9 +92,12 @@ def child(model: str, key: str) -> dict[str, Any]:
             for m in p.recent("height map").values()]
     return {"planned": sum(len(p.revolved) for _s, p in setups),
             "plan_s": round(plan_s, 1),
+            "plan_cpu_s": round(plan_cpu_s, 1),
             "turned_alive": len(parts),
             "maps_alive": len(maps),
             "maps_mb": round(sum(map_bytes(m) for m in maps) / 1e6, 1),
+            "maps_built": built["maps"],
+            "trees_built": built["trees"],
             "sha256": digest.hexdigest()[:12]}
 
 
@@ -104,13 +126,16 @@ def compare_rows(models: list[Path], keys: list[str], swaps: list[Swap],
                  extra: Callable[[dict[str, Any], dict[str, Any]], str] | None = None
                  ) -> None:
     """Per model and profile, :func:`before_and_after` as a Markdown row: model, profile,
-    both plan times (s), their ratio, ``extra`` of the two runs' figures where given, and
+    both plan times (s; wall clock, then in brackets CPU: the figure to compare on a
+    loaded machine), their ratios, ``extra`` of the two runs' figures where given, and
     whether the programs are the same bytes (their digests)."""
     for model in models:
         for key in keys:
             a, b = before_and_after(str(model), key, swaps)
-            cells = [model.stem, key, f"{a['plan_s']:.1f}", f"{b['plan_s']:.1f}",
-                     f"{a['plan_s'] / b['plan_s']:.2f}"]
+            cells = [model.stem, key] + [f"{r['plan_s']:.1f} ({r['plan_cpu_s']:.1f})"
+                                          for r in (a, b)]
+            cells.append(f"{a['plan_s'] / b['plan_s']:.2f} "
+                         f"({a['plan_cpu_s'] / b['plan_cpu_s']:.2f})")
             cells += [extra(a, b)] if extra is not None else []
             same = "yes" if a["sha256"] == b["sha256"] else "NO"
             cells.append(f"{same} ({a['sha256']}, {b['sha256']})")
@@ -118,19 +143,23 @@ def compare_rows(models: list[Path], keys: list[str], swaps: list[Swap],
 
 
 def compare_main(argv: list[str], doc: str, header: str,
-                 swaps: Callable[[], list[Swap]]) -> int:
+                 swaps: Callable[[], list[Swap]],
+                 extra: Callable[[dict[str, Any], dict[str, Any]], str] | None = None,
+                 extra_header: str = "") -> int:
     """The command line of a before-and-after benchmark: ``[--profile P ...] MODEL ...``;
     prints the Markdown table (``header``: the two timed columns' names, e.g. ``every
     query s | skipped s``) with a row per model and profile (:func:`compare_rows`) of
-    the ``swaps`` (made after the repository is on the path)."""
+    the ``swaps`` (made after the repository is on the path), with a column
+    ``extra_header`` of ``extra`` of the two runs' figures where given."""
     parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--profile", choices=sorted(PROFILES), action="append")
     parser.add_argument("models", nargs="+", type=Path)
     args = parser.parse_args(argv)
     sys.path.insert(0, str(REPO))
-    print(f"| model | profile | {header} | ratio | same programs |")
-    print("|---|---|---|---|---|---|")
-    compare_rows(args.models, args.profile or sorted(PROFILES), swaps())
+    more = f" {extra_header} |" if extra is not None else ""
+    print(f"| model | profile | {header} | ratio |{more} same programs |")
+    print("|---|---|---|---|---|---|" + ("---|" if extra is not None else ""))
+    compare_rows(args.models, args.profile or sorted(PROFILES), swaps(), extra)
     return 0
 
 

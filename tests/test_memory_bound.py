@@ -23,7 +23,7 @@ from probegen.cad import part as part_module
 from probegen.cli.plan import program_text
 from probegen.dialects import get_dialect
 from probegen.machine.profile import load_profile
-from probegen.planning import collision, heightmap
+from probegen.planning import collision, heightmap, revolved_spec
 from probegen.planning.setups import all_revolved_setups, plan_setups
 
 BLOCK = REPO / "samples/parts/five_face_block.step"
@@ -32,12 +32,15 @@ BUILD_TREE = collision.MeshObstacle._build
 BUILD_MAP = heightmap.HeightMap.__init__
 
 
-def plan_texts(monkeypatch: pytest.MonkeyPatch, kept: int) -> tuple[list[str], Counter[str]]:
+def plan_texts(monkeypatch: pytest.MonkeyPatch, kept: int, grouped: bool = True
+               ) -> tuple[list[str], Counter[str]]:
     """The DMIS programs of ``plan BLOCK --all-revolved --machine CMM`` (one per setup)
-    planned on a fresh load with ``kept`` values of a kind kept, and how many trees and
-    height maps were built.  Checks that no more than ``kept`` of either are alive at
-    any time."""
+    planned on a fresh load with ``kept`` values of a kind kept, the features planned
+    ``grouped`` by frame or in the recognised order (``revolved_spec.GROUPED``), and how
+    many trees and height maps were built.  Checks that no more than ``kept`` of either
+    are alive at any time."""
     monkeypatch.setattr(part_module, "RECENT_KEPT", kept)
+    monkeypatch.setattr(revolved_spec, "GROUPED", grouped)
     part = cad.load_part(BLOCK)
     built: Counter[str] = Counter()
 
@@ -80,11 +83,29 @@ def test_collision_geometry_is_bounded_and_the_programs_do_not_change(
     free, free_built = plan_texts(monkeypatch, 1000)
     # the block is planned in more frames (obstacles) than the bound below keeps
     assert free_built["obstacles"] >= 4
-    assert free_built["trees"] >= 4  # each tree once (one obstacle is never asked)
+    assert free_built["trees"] == 1  # the loaded part's: every frame places it
     assert free_built["maps"] >= 3
     bound, bound_built = plan_texts(monkeypatch, 1)
-    # trees and maps dropped and built again when their frame came back
-    assert bound_built["trees"] > free_built["trees"]
+    # maps dropped and built again when their frame came back
     assert bound_built["maps"] > free_built["maps"]
+    assert bound_built["trees"] == 1
     assert len(bound) == len(free) >= 1 and "MEAS/" in free[0]
     assert bound == free
+
+
+def test_frames_with_trees_of_their_own_plan_the_same(monkeypatch: pytest.MonkeyPatch
+                                                      ) -> None:
+    shared, shared_built = plan_texts(monkeypatch, 1000)
+    monkeypatch.setattr(collision, "SHARED_TREE", False)  # before stop 33
+    own, own_built = plan_texts(monkeypatch, 1000)
+    assert own_built["trees"] >= 4 and shared_built["trees"] == 1
+    assert own == shared
+
+
+def test_features_grouped_by_frame_plan_the_same_with_fewer_builds(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # one frame kept: every change of frame between two features builds again
+    recognised, recognised_built = plan_texts(monkeypatch, 1, grouped=False)
+    grouped, grouped_built = plan_texts(monkeypatch, 1, grouped=True)
+    assert grouped == recognised
+    assert grouped_built["maps"] < recognised_built["maps"]

@@ -13,6 +13,7 @@ from conftest import REPO
 
 from probegen.errors import CollisionError, ModelError, PlanningError, SpecError
 from probegen.machine.profile import MachineProfile, Stylus, load_profile
+from probegen.planning import styli
 from probegen.planning.styli import pick_stylus, rack_order, smallest_stylus
 
 CMM = load_profile(REPO / "samples" / "machines" / "cmm.toml")
@@ -141,3 +142,29 @@ def test_the_probe_stylus_plans_with_the_profile_itself() -> None:
         return "ok"
     pick_stylus(FIVE, plan)
     assert seen[0] is FIVE
+
+
+def test_the_message_of_none_plans_is_made_when_read(monkeypatch: pytest.MonkeyPatch
+                                                     ) -> None:
+    read: list[str] = []
+
+    class Counted:  # a stylus's error whose text costs a measurement to make
+        def __init__(self, ball: float) -> None:
+            self.ball = ball
+
+        def __str__(self) -> str:
+            read.append(f"{self.ball:g}")
+            return f"feature B1: ball {self.ball:g} collides"
+
+    def plan(m: MachineProfile) -> str:
+        raise PlanningError(Counted(m.probe.ball_diameter))
+
+    with pytest.raises(PlanningError) as info:
+        pick_stylus(FIVE, plan)
+    assert read == []  # dropped unread (another orientation plans it): nothing made
+    lazy = str(info.value)
+    assert read == ["6", "6", "3", "2", "1"] and str(info.value) == lazy  # made once
+    monkeypatch.setattr(styli, "LAZY", False)
+    with pytest.raises(PlanningError) as eager:
+        pick_stylus(FIVE, plan)
+    assert str(eager.value) == lazy

@@ -53,9 +53,10 @@ class Recent:
 
     For what a part builds once per frame and cannot keep for every frame: planning turns
     the part into a frame per head index, tilt, setup and off-grid feature axis
-    (:meth:`Part.turned`), and the collision geometry of each frame (the FCL tree of its
-    mesh, some 140 MB on NIST CTC 2, the ray tree of its inside test, its height maps,
-    up to 300 MB) kept for every frame went past 20 GB on CTC 2."""
+    (:meth:`Part.turned`), and the height maps of each frame (up to 300 MB with their
+    dilations) kept for every frame, with an FCL tree per frame (some 140 MB on NIST
+    CTC 2, now built once and placed by each frame's rotation), went past 20 GB on
+    CTC 2."""
 
     def __init__(self) -> None:
         self._values: OrderedDict[Hashable, Any] = OrderedDict()

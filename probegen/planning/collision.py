@@ -175,15 +175,20 @@ class SphereObstacle:
 class MeshObstacle:
     """A tessellated part; ``face_ids`` maps triangles to model face ids when known.
 
-    Its queries run on an FCL tree of the mesh (:attr:`part`) built on first use; with
-    ``part`` (the part the mesh is of), the tree and the other large values derived from
-    the mesh (its height map) are kept among the part's most recently used ones
-    (:meth:`probegen.cad.Part.recent`: the part turned into many frames has an obstacle
-    per frame), else with the obstacle.  What the obstacle found (the sweeps, the inside
-    tests) is kept with it whatever is dropped."""
+    Its queries run on an FCL tree of the mesh (:attr:`part`) and a ray tree for the
+    inside test, built on first use and kept with it.  A part turned into a frame
+    (``turned``: the obstacle of the part as loaded and the frame's rotation; the part
+    is turned into a frame per head index, tilt, setup and off-grid feature axis)
+    builds neither: its queries run on the loaded part's trees, the FCL tree placed by
+    the rotation (``p_frame = Rᵀ·p_work``) and the points of inside tests turned back.
+    With ``part`` (the part the mesh is of), the other large values derived from the
+    mesh (its height map) are kept among the part's most recently used ones
+    (:meth:`probegen.cad.Part.recent`), else with the obstacle.  What the obstacle found
+    (the sweeps, the inside tests) is kept with it whatever is dropped."""
 
     def __init__(self, mesh: Any, face_ids: np.ndarray | None,
-                 part: Part | None = None) -> None:
+                 part: Part | None = None,
+                 turned: tuple[MeshObstacle, Any] | None = None) -> None:
         import fcl
 
         from probegen.cad import Recent
@@ -196,6 +201,12 @@ class MeshObstacle:
             part.recent if part is not None else lambda kind: own.setdefault(kind, Recent()))
         """The kept values of a kind (:meth:`probegen.cad.Part.recent`), keyed by
         obstacle."""
+        self._turned = turned
+        self._keep = turned is not None or part is None or part.rotation is None
+        """Whether the trees are kept with the obstacle (the loaded part's, or a turned
+        part's placed ones); a turned part's own (no :data:`SHARED_TREE`) are kept
+        among the part's most recently used."""
+        self._geometry_kept: tuple[Any, Any, Any] | None = None
         self.request = fcl.DistanceRequest()
         self._objects: dict[Stylus, tuple[Any, list[tuple[Any, float]]]] = {}
         self._last: dict[Stylus, list[tuple[np.ndarray, float]]] = {}
@@ -222,12 +233,30 @@ class MeshObstacle:
         return self._geometry()[0]
 
     def _geometry(self) -> tuple[Any, Any]:
-        """The FCL object of the mesh and a mesh of its own for the inside test (whose
-        ray tree trimesh keeps on it), built on first use, kept as :attr:`recent`
-        says."""
-        return self.recent("collision tree").get(self, self._build)
+        """The FCL object of the mesh and a mesh for the inside test (whose ray tree
+        trimesh keeps on it), made on first use and kept: of its own
+        (:meth:`_build`), or, turned, the loaded part's tree placed by the rotation and
+        the loaded part's mesh (:meth:`contains` turns the points back)."""
+        if self._geometry_kept is None:
+            if not self._keep:  # a frame's own trees (no SHARED_TREE): the recent kept
+                return self.recent("collision tree").get(self, self._build)[:2]
+            if self._turned is None:
+                self._geometry_kept = self._build()
+            else:
+                base, rotation = self._turned
+                _, rays, bvh = base._trees()
+                self._geometry_kept = (self.fcl.CollisionObject(
+                    bvh, self.fcl.Transform(rotation.T)), rays, bvh)
+        return self._geometry_kept[0], self._geometry_kept[1]
 
-    def _build(self) -> tuple[Any, Any]:
+    def _trees(self) -> tuple[Any, Any, Any]:
+        """:meth:`_geometry` and the FCL tree itself (its geometry), of an obstacle
+        that keeps them."""
+        self._geometry()
+        assert self._geometry_kept is not None, "trees kept among the recent"
+        return self._geometry_kept
+
+    def _build(self) -> tuple[Any, Any, Any]:
         import trimesh
 
         fcl, mesh = self.fcl, self.mesh
@@ -237,7 +266,15 @@ class MeshObstacle:
         bvh.addSubModel(vertices, np.asarray(mesh.faces, dtype=np.int32))
         bvh.endModel()
         return (fcl.CollisionObject(bvh, fcl.Transform()),
-                trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False))
+                trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False), bvh)
+
+    def contains(self, point: np.ndarray) -> bool:
+        """Whether the mesh holds ``point`` (trimesh's ray test; turned, on the loaded
+        part's mesh at the point turned back: ``p_work = R·p_frame``)."""
+        rays = self._geometry()[1]
+        if self._turned is not None:
+            point = self._turned[1] @ point
+        return bool(rays.contains(point[None])[0])
 
     def _stylus(self, stylus: Stylus) -> tuple[Any, list[tuple[Any, float]]]:
         """The fcl objects of ``stylus``: its ball, and its shank and body each with the
@@ -391,7 +428,7 @@ class MeshObstacle:
             hit = self._inside[key] = bool(
                 np.all(point >= low) and np.all(point <= high)
                 and not self._sees_the_sky(point, float(high[2]))
-                and self._geometry()[1].contains(point[None])[0])
+                and self.contains(point))
         return hit
 
     def _sees_the_sky(self, point: np.ndarray, top: float) -> bool:
@@ -543,7 +580,19 @@ def mesh_obstacle(part: Part, offset: Sequence[float] | None = None) -> MeshObst
     if offset is not None:
         mesh = mesh.copy()
         mesh.apply_translation(offset)
-    return MeshObstacle(mesh, mesh.metadata.get("face_ids"), part)
+        return MeshObstacle(mesh, mesh.metadata.get("face_ids"), part)
+    turned = None
+    if part.rotation is not None and SHARED_TREE:
+        base = obstacle_for(part.original, [])
+        assert isinstance(base, MeshObstacle)
+        turned = (base, np.asarray(part.rotation, dtype=np.float64))
+    return MeshObstacle(mesh, mesh.metadata.get("face_ids"), part, turned)
+
+
+SHARED_TREE = True
+"""Whether the obstacle of a turned part queries the loaded part's FCL and ray trees
+placed by its rotation (:class:`MeshObstacle`); False: each frame builds trees of its
+own (before stop 33; ``benchmarks/bench_shared_tree.py`` times both)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -28,9 +28,8 @@ Paths that cleared unchanged come back unchanged (byte-identical programs).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from functools import partial
 from itertools import pairwise
 
 import numpy as np
@@ -51,6 +50,7 @@ from probegen.planning.collision import (
 )
 from probegen.planning.heightmap import FCL_SLACK, clear_segments, height_map
 from probegen.planning.revolved import FeaturePlan, PathKind, PathPoint, path_length
+from probegen.planning.text import Text
 
 Vec3 = tuple[float, float, float]
 
@@ -60,37 +60,6 @@ LAZY = True
 (:class:`Text`); the same texts either way (``benchmarks/bench_lazy_refusals.py`` times
 both)."""
 
-
-class Text:
-    """A message made when it is first read (``str``, ``format``), then kept: what a
-    refused move ran into is measured (:func:`probegen.planning.collision.describe`:
-    how deep the stylus cuts into the part) only for the messages a user reads, not for
-    each of the many attempts a planner tries and drops (another retract, section,
-    stylus or head index).  The same text either way."""
-
-    __slots__ = ("_make", "_text")
-
-    def __init__(self, make: Callable[[], str]) -> None:
-        self._make: Callable[[], str] | None = make
-        self._text: str | None = None
-
-    def __str__(self) -> str:
-        if self._text is None:
-            assert self._make is not None
-            self._text, self._make = self._make(), None
-        return self._text
-
-    def __format__(self, spec: str) -> str:
-        return format(str(self), spec)
-
-    def __repr__(self) -> str:
-        return f"Text({str(self)!r})"
-
-    @classmethod
-    def format(cls, template: str, *args: object) -> Text:
-        """``template.format(*args)`` when first read (a :class:`Text` among ``args``
-        read then)."""
-        return cls(partial(template.format, *args))
 
 LIFT_HEIGHTS = (5.0, 15.0)
 """Lift heights tried, mm above the higher end of a link, after the local height (or

@@ -19,6 +19,7 @@ from typing import TypeVar
 from probegen.errors import PlanningError, SpecError
 from probegen.machine.profile import MachineProfile, Stylus
 from probegen.machine.rack import is_star, star_refusal
+from probegen.planning.text import Text
 
 T = TypeVar("T")
 
@@ -104,22 +105,35 @@ def profile_with(machine: MachineProfile, s: Stylus) -> MachineProfile:
     return machine if s == machine.stylus else machine.with_stylus(s)
 
 
+LAZY = True
+"""Whether the message of a feature no stylus plans (:func:`_none_plans`) is made when
+it is first read (:class:`~probegen.planning.text.Text`): each stylus's error then
+measures what its refused moves ran into only for a message a user reads, not for a
+feature the probe along its axis does not reach and a leaning index then does (the
+same text either way; ``benchmarks/bench_lazy_styli.py`` times both)."""
+
+
 def _none_plans(failures: list[tuple[Stylus, PlanningError]]) -> PlanningError:
     """The smallest stylus's error (the most permissive stylus: what the user acts on),
     naming it, with a sentence of what every stylus said (one stylus: its error
-    unchanged)."""
+    unchanged); the message made when first read (:data:`LAZY`)."""
     smallest, last = failures[-1]
     if len(failures) == 1:
         return last
-    texts = [str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-             for _, exc in failures]
-    # the common lead up to its last ": " before any parenthesis (a detail in
-    # parentheses, such as the touch a collision dropped, is each stylus's own)
-    common = os.path.commonprefix(texts).split(" (", 1)[0]
-    cut = common.rfind(": ") + 2 if ": " in common else 0
-    said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
-                     for (s, _), text in zip(failures, texts, strict=True))
-    return type(last)(f"{last} (with {smallest.label}, {NONE_PLANS}{said})")
+
+    def message() -> str:
+        said_by = [(str(exc), type(exc).__name__) for _, exc in failures]
+        texts = [text.splitlines()[0] if text else name for text, name in said_by]
+        # the common lead up to its last ": " before any parenthesis (a detail in
+        # parentheses, such as the touch a collision dropped, is each stylus's own)
+        common = os.path.commonprefix(texts).split(" (", 1)[0]
+        cut = common.rfind(": ") + 2 if ": " in common else 0
+        said = "; ".join(f"{s.label} (ball {s.ball_diameter:g} mm): {_short(text[cut:])}"
+                         for (s, _), text in zip(failures, texts, strict=True))
+        return f"{said_by[-1][0]} (with {smallest.label}, {NONE_PLANS}{said})"
+
+    text = Text(message)
+    return type(last)(text if LAZY else str(text))
 
 
 def own_reason(message: str) -> str:
