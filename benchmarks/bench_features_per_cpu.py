@@ -7,9 +7,10 @@ Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_features_per_cpu.py PROFILE
       CPU_SECONDS
 
 PROFILE is ``cmm`` or ``5axis`` (``bench_memory.PROFILES``).  Twice, each on a fresh load
-of the model: first the baseline (``revolved_spec.GROUPED``, ``styli.LAZY`` and
-``collision.SHARED_TREE`` off: the features planned in the order recognised, the message
-of a feature no stylus plans made at once, an FCL tree built per frame), then as shipped;
+of the model: first the baseline (``revolved_spec.GROUPED``, ``styli.LAZY``,
+``collision.SHARED_TREE`` and ``heightmap.SINGLE`` off: the features planned in the order
+recognised, the message of a feature no stylus plans made at once, an FCL tree built per
+frame, the height maps dilated in double precision), then as shipped;
 each stopped after CPU_SECONDS of the process's CPU time (user and system: the count does
 not depend on what else runs on the machine).  Prints per run the features whose
 planning finished (``revolved_spec._plan_or_circle`` returned or raised), the height maps
@@ -90,11 +91,12 @@ def main(argv: list[str]) -> int:
     key, model, seconds = argv[0], Path(argv[1]), float(argv[2])
     sys.path.insert(0, str(REPO))
     warnings.simplefilter("ignore")
-    from probegen.planning import collision, revolved_spec, styli
+    from probegen.planning import collision, heightmap, revolved_spec, styli
 
     before = run(model, key, seconds, [(revolved_spec, "GROUPED", False),
                                        (styli, "LAZY", False),
-                                       (collision, "SHARED_TREE", False)])
+                                       (collision, "SHARED_TREE", False),
+                                       (heightmap, "SINGLE", False)])
     after = run(model, key, seconds, [])
     print("| model | profile | CPU s | features before | maps / trees before | "
           "features after | maps / trees after | ratio |")

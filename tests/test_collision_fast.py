@@ -198,6 +198,38 @@ def test_large_triangles_are_rasterised_as_small_ones(seed: int, n: int, size: f
     assert np.isfinite(maps[0]).any()
 
 
+@settings(max_examples=examples(30), deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 30), size=st.floats(0.5, 300.0),
+       radius=st.floats(0.0, 8.0))
+def test_single_precision_dilations_stay_upper_bounds(seed: int, n: int, size: float,
+                                                      radius: float) -> None:
+    """The dilated grids in single precision (``heightmap.SINGLE``) lie at or above the
+    double-precision ones everywhere (still upper bounds of the mesh), by no more than
+    float32's rounding of the value, and empty (-inf) in the same cells."""
+    from probegen.planning import heightmap
+
+    rng = np.random.default_rng(seed)
+    vertices = rng.uniform(-size, size, (3 * n, 3))
+    faces = np.arange(3 * n, dtype=np.int64).reshape(n, 3)
+    hmap = heightmap.HeightMap(vertices, faces)
+    grids = []
+    for single in (False, True):
+        saved = heightmap.SINGLE
+        heightmap.SINGLE = single
+        try:
+            hmap._dilated.clear()
+            grids.append(hmap.dilated(radius)[0])
+        finally:
+            heightmap.SINGLE = saved
+    double, single_grid = grids[0], grids[1].astype(np.float64)
+    assert grids[1].dtype == np.float32
+    assert np.array_equal(np.isneginf(double), np.isneginf(single_grid))
+    finite = np.isfinite(double)
+    assert np.all(single_grid[finite] >= double[finite])
+    ulp = np.spacing(np.abs(double[finite]).astype(np.float32)).astype(np.float64)
+    assert np.all(single_grid[finite] - double[finite] <= ulp)
+
+
 def _feature(**changes: Any) -> tuple[FreeformSpec, Spec]:
     f = SPEC.features[0]
     assert isinstance(f, FreeformSpec)
