@@ -25,15 +25,12 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from probegen import cad  # noqa: E402
-from probegen.ir import frames  # noqa: E402
 from probegen.machine.profile import load_profile  # noqa: E402
 from probegen.planning import heightmap  # noqa: E402
 from probegen.planning.collision import MESH_TOLERANCE, MIN_STEP, probe_stylus  # noqa: E402
 
-SHARED = REPO.parent / "shared" / "ref"
-MODELS = [SHARED / "nist-step/nist_ctc_04_asme1_rd.stp",
-          SHARED / "nist-step/nist_ctc_02_asme1_rc.stp"]
+sys.path.insert(0, str(REPO / "benchmarks"))
+from bench_heightmap import MODELS, model_frames  # noqa: E402
 
 
 def dilate(hmap: heightmap.HeightMap, radii: list[float], single: bool
@@ -67,25 +64,22 @@ def main() -> None:
     print("| model | frame | cells | double s | single s | ratio | double MB | single MB | "
           "single above double, most mm | never below |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for model in models:
-        part = cad.load_part(model)
-        for name, p in (("as loaded", part),
-                        ("turned", part.turned(frames.from_euler_zxz(30.0, 60.0, -45.0)))):
-            mesh = p.mesh(MESH_TOLERANCE)
-            hmap = heightmap.HeightMap(np.asarray(mesh.vertices, dtype=np.float64),
-                                       np.asarray(mesh.faces, dtype=np.int64))
-            t64, g64 = dilate(hmap, ordered, False)
-            t32, g32 = dilate(hmap, ordered, True)
-            # the heights the stylus meets: the part's own z range (a steep triangle's
-            # plane bound can lie far below it, where single precision is coarser)
-            floor = float(mesh.bounds[0][2]) - 1.0
-            above = max(float((b.astype(np.float64)[a >= floor] - a[a >= floor]).max(
-                initial=0.0)) for a, b in zip(g64, g32, strict=True))
-            below = all(np.all(b.astype(np.float64) >= a) for a, b in zip(g64, g32, strict=True))
-            print(f"| {model.stem} | {name} | {hmap.height.size} | {t64:.2f} | {t32:.2f} | "
-                  f"{t64 / t32:.2f} | {sum(a.nbytes for a in g64) / 1e6:.0f} | "
-                  f"{sum(b.nbytes for b in g32) / 1e6:.0f} | {above:.1e} | "
-                  f"{'yes' if below else 'NO'} |", flush=True)
+    for model, name, p in model_frames(models):
+        mesh = p.mesh(MESH_TOLERANCE)
+        hmap = heightmap.HeightMap(np.asarray(mesh.vertices, dtype=np.float64),
+                                   np.asarray(mesh.faces, dtype=np.int64))
+        t64, g64 = dilate(hmap, ordered, False)
+        t32, g32 = dilate(hmap, ordered, True)
+        # the heights the stylus meets: the part's own z range (a steep triangle's
+        # plane bound can lie far below it, where single precision is coarser)
+        floor = float(mesh.bounds[0][2]) - 1.0
+        above = max(float((b.astype(np.float64)[a >= floor] - a[a >= floor]).max(
+            initial=0.0)) for a, b in zip(g64, g32, strict=True))
+        below = all(np.all(b.astype(np.float64) >= a) for a, b in zip(g64, g32, strict=True))
+        print(f"| {model.stem} | {name} | {hmap.height.size} | {t64:.2f} | {t32:.2f} | "
+              f"{t64 / t32:.2f} | {sum(a.nbytes for a in g64) / 1e6:.0f} | "
+              f"{sum(b.nbytes for b in g32) / 1e6:.0f} | {above:.1e} | "
+              f"{'yes' if below else 'NO'} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -48,36 +49,42 @@ def one_by_one(hmap: heightmap.HeightMap, tri: np.ndarray) -> np.ndarray:
     return np.maximum(out, rest)
 
 
+def model_frames(models: list[Path]) -> Iterator[tuple[Path, str, cad.Part]]:
+    """Per model, the part as loaded and turned as a head index turns it (Euler ZXZ 30,
+    60, -45): (model, frame name, part)."""
+    for model in models:
+        part = cad.load_part(model)
+        yield model, "as loaded", part
+        yield model, "turned", part.turned(frames.from_euler_zxz(30.0, 60.0, -45.0))
+
+
 def main() -> None:
     models = [Path(a) for a in sys.argv[1:]] or MODELS
     print("| model | frame | triangles | large | cells of the large ones' boxes | "
           "one by one s | planes once s | ratio | same map |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for model in models:
-        part = cad.load_part(model)
-        for name, p in (("as loaded", part),
-                        ("turned", part.turned(frames.from_euler_zxz(30.0, 60.0, -45.0)))):
-            mesh = p.mesh()
-            v = np.asarray(mesh.vertices, dtype=np.float64)
-            f = np.asarray(mesh.faces, dtype=np.int64)
-            tri = v[f]
-            hmap = heightmap.HeightMap(v, f)
-            lo, hi = hmap._cells(tri)
-            counts = (hi - lo + 1).prod(axis=1)
-            large = counts > heightmap.BIG
-            times: dict[str, float] = {}
-            maps = {}
-            for way in ("old", "new"):
-                best = float("inf")
-                for _ in range(3):
-                    t = time.process_time()
-                    maps[way] = one_by_one(hmap, tri) if way == "old" else hmap._rasterise(tri)
-                    best = min(best, time.process_time() - t)
-                times[way] = best
-            same = np.array_equal(maps["old"], maps["new"])
-            print(f"| {model.stem} | {name} | {len(tri)} | {int(large.sum())} | "
-                  f"{int(counts[large].sum())} | {times['old']:.2f} | {times['new']:.2f} | "
-                  f"{times['old'] / times['new']:.2f} | {'yes' if same else 'NO'} |", flush=True)
+    for model, name, p in model_frames(models):
+        mesh = p.mesh()
+        v = np.asarray(mesh.vertices, dtype=np.float64)
+        f = np.asarray(mesh.faces, dtype=np.int64)
+        tri = v[f]
+        hmap = heightmap.HeightMap(v, f)
+        lo, hi = hmap._cells(tri)
+        counts = (hi - lo + 1).prod(axis=1)
+        large = counts > heightmap.BIG
+        times: dict[str, float] = {}
+        maps = {}
+        for way in ("old", "new"):
+            best = float("inf")
+            for _ in range(3):
+                t = time.process_time()
+                maps[way] = one_by_one(hmap, tri) if way == "old" else hmap._rasterise(tri)
+                best = min(best, time.process_time() - t)
+            times[way] = best
+        same = np.array_equal(maps["old"], maps["new"])
+        print(f"| {model.stem} | {name} | {len(tri)} | {int(large.sum())} | "
+              f"{int(counts[large].sum())} | {times['old']:.2f} | {times['new']:.2f} | "
+              f"{times['old'] / times['new']:.2f} | {'yes' if same else 'NO'} |", flush=True)
 
 
 if __name__ == "__main__":
