@@ -103,9 +103,9 @@ def planning_order(found: list[Any], part: Part, machine: MachineProfile) -> lis
     for those reached from above, one for those no orientation reaches), the groups in
     the order their first feature was recognised, each in recognition order.  A
     feature's plan does not depend on the order (what planning keeps per frame is a
-    function of the frame): the order only decides how often a frame's height maps and
-    collision trees, of which the part keeps the most recently used
-    (:class:`probegen.cad.Recent`), are built again (NIST CTC 4 with the CMM: 293
+    function of the frame): the order only decides how often a frame's height maps, of
+    which the part keeps the most recently used (:class:`probegen.cad.Recent`), are
+    built again (the collision trees are the loaded part's) (NIST CTC 4 with the CMM: 293
     features in 120 runs of 12 first frames as recognised).  Without :data:`GROUPED`,
     the recognised order."""
     if not GROUPED:

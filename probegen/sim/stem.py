@@ -97,8 +97,8 @@ class Stem:
         return int(self._face_ids[triangle]) + 1 if 0 <= triangle < len(self._face_ids) else 0
 
 
-_RING = np.column_stack([np.cos(np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False)),
-                         np.sin(np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False))])
+_ANGLES = np.linspace(0.0, 2.0 * math.pi, SIDES, endpoint=False)
+_RING = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
 """The unit :data:`SIDES`-gon's corners (cos, sin)."""
 
 
